@@ -3,6 +3,14 @@
 //! Novikov). See DESIGN.md for the data flow of one run.
 
 pub mod accel;
+pub mod authoring;
+pub mod backend;
 pub mod import;
+pub mod lightmesh;
 pub mod output;
+pub mod render;
 pub mod scene;
+pub mod schedule;
+pub mod sequence;
+pub mod settings;
+pub mod stats;

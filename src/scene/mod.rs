@@ -70,6 +70,9 @@ pub struct Material {
     pub base_color_texture: Option<TextureRef>,
     pub metallic: f32,
     pub roughness: f32,
+    /// KHR_materials_specular `specularFactor`: weight of the dielectric
+    /// specular lobe (1 when absent; 0 makes a purely Lambertian surface).
+    pub specular: f32,
     /// Linear RGB emitted radiance factor.
     pub emissive: Vec3,
     pub emissive_texture: Option<TextureRef>,
@@ -89,6 +92,7 @@ impl Default for Material {
             base_color_texture: None,
             metallic: 1.0,
             roughness: 1.0,
+            specular: 1.0,
             emissive: Vec3::ZERO,
             emissive_texture: None,
             double_sided: false,

@@ -1,0 +1,290 @@
+//! The CPU backend: a frame as a wavefront of stages, each a parallel rayon
+//! loop over independent items, run band by band so memory stays bounded
+//! at any resolution and sample count.
+//!
+//! Stages (DESIGN.md, "One frame, as stages"): `primary` (camera rays over
+//! 16×16 tiles), `secondary` (the Whitted recursion, level by level), for
+//! the light-mesh methods `demand` and `fill` (node masks), then `shade`
+//! (formula (1) or (2) per shading point) and `resolve` (samples to pixels).
+//! Every stage collects in a fixed order and sums sequentially, so the image
+//! is the same for any thread count.
+
+use std::time::Instant;
+
+use glam::{UVec2, Vec3, Vec4};
+use rayon::prelude::*;
+
+use super::sampling::film_position;
+use crate::accel::Ray;
+use crate::lightmesh::interpolate::{PointCounts, Scratch, Variant};
+use crate::lightmesh::{LightMesh, LightMeshError, LightMeshStats};
+use crate::output::Image;
+use crate::render::scatter::secondary_rays;
+use crate::render::surface::ShadingPoint;
+use crate::render::{whitted, FrameJob};
+use crate::stats::FrameStats;
+
+const TILE: u32 = 16;
+/// Samples per band: bounds the shading-point buffers to a few hundred MB.
+const SAMPLES_PER_BAND: u64 = 1 << 20;
+
+#[derive(Debug, thiserror::Error)]
+#[error("cannot start {threads} render threads: {source}")]
+pub struct BackendError {
+    threads: usize,
+    source: rayon::ThreadPoolBuildError,
+}
+
+/// Renders frames on a rayon pool of its own.
+pub struct CpuBackend {
+    pool: rayon::ThreadPool,
+}
+
+impl CpuBackend {
+    /// A backend with `threads` workers, or one per core when None.
+    pub fn new(threads: Option<usize>) -> Result<CpuBackend, BackendError> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads.unwrap_or(0))
+            .build()
+            .map_err(|source| BackendError {
+                threads: threads.unwrap_or(0),
+                source,
+            })?;
+        Ok(CpuBackend { pool })
+    }
+
+    pub fn threads(&self) -> usize {
+        self.pool.current_num_threads()
+    }
+
+    /// Renders one frame; stage times, ray and point counts go to `stats`.
+    pub fn render(
+        &self,
+        job: &FrameJob,
+        shading: &mut Shading,
+        stats: &mut FrameStats,
+    ) -> Result<Image, LightMeshError> {
+        self.pool.install(|| {
+            let mut pixels = Vec::with_capacity((job.width * job.height) as usize);
+            let mut counts = PointCounts::default();
+            let mut lightmesh = LightMeshStats::default();
+            for rows in bands(job) {
+                pixels.extend(render_band(
+                    job,
+                    rows,
+                    shading,
+                    stats,
+                    &mut counts,
+                    &mut lightmesh,
+                )?);
+            }
+            if let Shading::LightMesh { mesh, .. } = shading {
+                let points = stats.shading_points.max(1) as f64;
+                stats.lightmesh = Some(LightMeshStats {
+                    h: mesh.lattice.h,
+                    ki: mesh.ki,
+                    mean_candidates: counts.candidates as f64 / points,
+                    mean_interp_set: counts.interp_set as f64 / points,
+                    mean_p2n_tests: counts.p2n_tests as f64 / points,
+                    fallback_points: counts.fallback,
+                    ..lightmesh
+                });
+            }
+            Ok(Image {
+                width: job.width,
+                height: job.height,
+                pixels,
+            })
+        })
+    }
+}
+
+/// How the direct light of shading points is computed.
+pub enum Shading<'a> {
+    /// Formula (1): a shadow ray per point and light.
+    Whitted,
+    /// Formula (2) from a light mesh that persists across frames.
+    LightMesh {
+        mesh: &'a mut LightMesh,
+        variant: Variant,
+    },
+}
+
+/// Rows of the image split into bands of whole tile rows.
+fn bands(job: &FrameJob) -> impl Iterator<Item = std::ops::Range<u32>> {
+    let samples_per_row = job.width as u64 * job.spp as u64;
+    let tile_rows = (SAMPLES_PER_BAND / (samples_per_row * TILE as u64)).max(1) as u32;
+    let band_height = tile_rows * TILE;
+    let height = job.height;
+    (0..height.div_ceil(band_height))
+        .map(move |band| band * band_height..((band + 1) * band_height).min(height))
+}
+
+fn render_band(
+    job: &FrameJob,
+    rows: std::ops::Range<u32>,
+    shading: &mut Shading,
+    stats: &mut FrameStats,
+    counts: &mut PointCounts,
+    lightmesh: &mut LightMeshStats,
+) -> Result<Vec<Vec4>, LightMeshError> {
+    let band_samples = ((rows.end - rows.start) * job.width * job.spp) as usize;
+
+    let start = Instant::now();
+    let primary = primary_hits(job, rows.clone());
+    stats.rays.primary += band_samples as u64;
+    stats.add_stage_time("primary", start.elapsed().as_secs_f64());
+
+    let start = Instant::now();
+    let mut covered = vec![false; band_samples];
+    for point in &primary {
+        covered[point.sample as usize] = true;
+    }
+    let mut points = primary;
+    let mut frontier = 0..points.len();
+    for _ in 0..job.max_depth {
+        let (next, rays) = secondary_hits(job, &points[frontier.clone()]);
+        stats.rays.secondary += rays;
+        if next.is_empty() {
+            break;
+        }
+        frontier = points.len()..points.len() + next.len();
+        points.extend(next);
+    }
+    stats.add_stage_time("secondary", start.elapsed().as_secs_f64());
+
+    let lights = &job.frame.lights;
+    let bits_before = lightmesh.bits_computed;
+    let shaded: Vec<(Vec3, PointCounts)> = match shading {
+        Shading::Whitted => {
+            let start = Instant::now();
+            let shaded = points
+                .par_iter()
+                .map(|point| {
+                    let (direct, shadow_rays) = whitted::direct_light(point, lights, job.world);
+                    let counts = PointCounts {
+                        shadow_rays,
+                        ..PointCounts::default()
+                    };
+                    (point.weight * (point.emitted() + direct), counts)
+                })
+                .collect();
+            stats.add_stage_time("shade", start.elapsed().as_secs_f64());
+            shaded
+        }
+        Shading::LightMesh { mesh, variant } => {
+            let start = Instant::now();
+            let demand = mesh.demand(&points, lights);
+            stats.add_stage_time("demand", start.elapsed().as_secs_f64());
+
+            let start = Instant::now();
+            mesh.fill(&demand, lights, job.world, lightmesh)?;
+            stats.add_stage_time("fill", start.elapsed().as_secs_f64());
+
+            let start = Instant::now();
+            let mesh = &**mesh;
+            let variant = *variant;
+            let shaded = points
+                .par_iter()
+                .map_init(Scratch::default, |scratch, point| {
+                    let (direct, counts) = mesh.shade(point, lights, job.world, variant, scratch);
+                    (point.weight * (point.emitted() + direct), counts)
+                })
+                .collect();
+            stats.add_stage_time("shade", start.elapsed().as_secs_f64());
+            shaded
+        }
+    };
+    let mut band_counts = PointCounts::default();
+    for (_, point_counts) in &shaded {
+        band_counts += *point_counts;
+    }
+    // Every occlusion segment is a shadow ray: formula (1)'s, the fill's
+    // node-to-light ones and LMM's point-to-node tests.
+    stats.rays.shadow +=
+        band_counts.shadow_rays + band_counts.p2n_tests + lightmesh.bits_computed - bits_before;
+    *counts += band_counts;
+    stats.shading_points += points.len() as u64;
+
+    let start = Instant::now();
+    let mut radiance = vec![Vec3::ZERO; band_samples];
+    for (point, (value, _)) in points.iter().zip(&shaded) {
+        radiance[point.sample as usize] += *value;
+    }
+    let spp = job.spp as usize;
+    let pixels = radiance
+        .chunks(spp)
+        .zip(covered.chunks(spp))
+        .map(|(samples, hits)| {
+            let colour = samples.iter().sum::<Vec3>() / spp as f32;
+            let coverage = hits.iter().filter(|&&hit| hit).count() as f32 / spp as f32;
+            colour.extend(coverage)
+        })
+        .collect();
+    stats.add_stage_time("resolve", start.elapsed().as_secs_f64());
+    Ok(pixels)
+}
+
+/// Stage 1: camera rays of every sample in the band, tile by tile.
+fn primary_hits(job: &FrameJob, rows: std::ops::Range<u32>) -> Vec<ShadingPoint> {
+    let tiles: Vec<UVec2> = (rows.start..rows.end)
+        .step_by(TILE as usize)
+        .flat_map(|y| {
+            (0..job.width)
+                .step_by(TILE as usize)
+                .map(move |x| UVec2::new(x, y))
+        })
+        .collect();
+    let per_tile: Vec<Vec<ShadingPoint>> = tiles
+        .par_iter()
+        .map(|&corner| {
+            let mut points = Vec::new();
+            for y in corner.y..(corner.y + TILE).min(rows.end) {
+                for x in corner.x..(corner.x + TILE).min(job.width) {
+                    for s in 0..job.spp {
+                        let film = film_position(UVec2::new(x, y), job.width, s, job.spp);
+                        let ray = job.frame.camera.primary_ray(film, job.width, job.height);
+                        let sample = ((y - rows.start) * job.width + x) * job.spp + s;
+                        points.extend(trace(job, &ray, sample, Vec3::ONE, 0));
+                    }
+                }
+            }
+            points
+        })
+        .collect();
+    per_tile.into_iter().flatten().collect()
+}
+
+/// Stage 2, one level: rays that mirrors and glass spawn from `points`.
+fn secondary_hits(job: &FrameJob, points: &[ShadingPoint]) -> (Vec<ShadingPoint>, u64) {
+    let spawned: Vec<(Vec<ShadingPoint>, u64)> = points
+        .par_iter()
+        .map(|point| {
+            let mut hits = Vec::new();
+            let mut rays = 0;
+            for secondary in secondary_rays(point) {
+                rays += 1;
+                hits.extend(trace(
+                    job,
+                    &secondary.ray,
+                    point.sample,
+                    secondary.weight,
+                    point.depth + 1,
+                ));
+            }
+            (hits, rays)
+        })
+        .collect();
+    let rays = spawned.iter().map(|(_, rays)| rays).sum();
+    (
+        spawned.into_iter().flat_map(|(hits, _)| hits).collect(),
+        rays,
+    )
+}
+
+fn trace(job: &FrameJob, ray: &Ray, sample: u32, weight: Vec3, depth: u32) -> Option<ShadingPoint> {
+    let hit = job.world.closest_hit(ray)?;
+    Some(ShadingPoint::from_hit(
+        job.scene, job.frame, ray, &hit, sample, weight, depth,
+    ))
+}

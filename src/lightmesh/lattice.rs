@@ -1,0 +1,143 @@
+//! The light mesh's lattice: node (i, j, k) sits at `origin + h·(i, j, k)`,
+//! integer coordinates, no bound on extent. The origin is fixed per scene
+//! (in render space, which is itself fixed per sequence), so a node is the
+//! same node in every frame and its mask can be reused.
+
+use glam::{IVec3, Vec3};
+
+/// Where the lattice origin sits inside a cell, as a fraction of `h` per
+/// axis. Scenes are modelled on round coordinates (floors at y = 0, walls on
+/// whole metres); an irrational-looking offset keeps nodes off those planes,
+/// so the common case is the general position the paper's counts assume.
+/// Tests that want nodes on surfaces set the origin explicitly.
+pub const GENERAL_POSITION: Vec3 = Vec3::new(0.382_683_4, 0.414_213_57, 0.447_213_6);
+
+/// Node coordinates must stay well inside `i32` so that brick arithmetic
+/// and neighbour offsets cannot overflow.
+pub const MAX_NODE_COORDINATE: f32 = (1 << 28) as f32;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lattice {
+    pub origin: Vec3,
+    /// Node spacing in metres.
+    pub h: f32,
+}
+
+impl Lattice {
+    /// A lattice of step `h` in general position relative to render space.
+    pub fn new(h: f32) -> Lattice {
+        Lattice {
+            origin: GENERAL_POSITION * h,
+            h,
+        }
+    }
+
+    pub fn node_position(&self, node: IVec3) -> Vec3 {
+        self.origin + self.h * node.as_vec3()
+    }
+
+    /// Whether every node within `radius` of `p` has a representable
+    /// coordinate.
+    pub fn covers(&self, p: Vec3, radius: f32) -> bool {
+        let far = ((p - self.origin).abs() + Vec3::splat(radius)) / self.h;
+        far.max_element() < MAX_NODE_COORDINATE
+    }
+
+    /// Steps 1 and 2 of the paper: the nodes `x` with `|x − p| ≤ radius` and
+    /// `(n, x − p) > 0`, appended to `out` in a fixed order (k, j, i).
+    /// A node exactly on the tangent plane (including `p` itself when it is
+    /// a node) fails step 2: it is not on the visible side.
+    pub fn half_ball(&self, p: Vec3, n: Vec3, radius: f32, out: &mut Vec<IVec3>) {
+        let local = (p - self.origin) / self.h;
+        let reach = radius / self.h;
+        let low = (local - Vec3::splat(reach)).ceil().as_ivec3();
+        let high = (local + Vec3::splat(reach)).floor().as_ivec3();
+        let radius_squared = radius * radius;
+        for k in low.z..=high.z {
+            for j in low.y..=high.y {
+                for i in low.x..=high.x {
+                    let node = IVec3::new(i, j, k);
+                    let offset = self.node_position(node) - p;
+                    if offset.length_squared() <= radius_squared && n.dot(offset) > 0.0 {
+                        out.push(node);
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn count(lattice: &Lattice, p: Vec3, n: Vec3, radius: f32) -> usize {
+        let mut nodes = Vec::new();
+        lattice.half_ball(p, n, radius, &mut nodes);
+        nodes.len()
+    }
+
+    #[test]
+    fn half_ball_holds_nodes_within_the_radius_on_the_normal_side() {
+        let lattice = Lattice::new(0.5);
+        let p = Vec3::new(0.3, 0.7, -0.2);
+        let n = Vec3::new(0.1, 1.0, 0.2).normalize();
+        let mut nodes = Vec::new();
+        lattice.half_ball(p, n, 1.25, &mut nodes);
+        assert!(!nodes.is_empty());
+        for node in &nodes {
+            let x = lattice.node_position(*node);
+            assert!((x - p).length() <= 1.25 && n.dot(x - p) > 0.0);
+        }
+        // Brute force over a generous box finds the same set.
+        let mut brute = 0;
+        for k in -10..10 {
+            for j in -10..10 {
+                for i in -10..10 {
+                    let x = lattice.node_position(IVec3::new(i, j, k));
+                    brute +=
+                        ((x - p).length_squared() <= 1.25 * 1.25 && n.dot(x - p) > 0.0) as usize;
+                }
+            }
+        }
+        assert_eq!(nodes.len(), brute);
+    }
+
+    #[test]
+    fn a_point_on_a_node_excludes_that_node() {
+        let lattice = Lattice {
+            origin: Vec3::ZERO,
+            h: 1.0,
+        };
+        let p = Vec3::new(2.0, 3.0, 4.0);
+        let mut nodes = Vec::new();
+        lattice.half_ball(p, Vec3::Y, 1.0, &mut nodes);
+        // Radius h around a node: its 6 neighbours; only the one above
+        // passes step 2, the 4 on the tangent plane and the node itself fail.
+        assert_eq!(nodes, vec![IVec3::new(2, 4, 4)]);
+    }
+
+    #[test]
+    fn a_plane_on_a_lattice_plane_loses_its_own_nodes() {
+        let on_plane = Lattice {
+            origin: Vec3::ZERO,
+            h: 1.0,
+        };
+        let general = Lattice::new(1.0);
+        let mut total_on = 0;
+        let mut total_general = 0;
+        for step in 0..200 {
+            let p = Vec3::new(step as f32 * 0.137, 0.0, step as f32 * 0.291);
+            total_on += count(&on_plane, p, Vec3::Y, 2.5);
+            total_general += count(&general, p, Vec3::Y, 2.5);
+        }
+        assert!(total_on < total_general, "{total_on} vs {total_general}");
+    }
+
+    #[test]
+    fn coverage_refuses_coordinates_past_the_limit() {
+        let lattice = Lattice::new(1e-3);
+        assert!(lattice.covers(Vec3::splat(1e3), 1.0));
+        assert!(!lattice.covers(Vec3::new(1e6, 0.0, 0.0), 1.0));
+    }
+}

@@ -1,0 +1,91 @@
+//! The light mesh (paper section 2): a lattice of nodes with step `h`, each
+//! carrying a lazily computed visibility mask with one bit per light, and
+//! the interpolation that turns those masks into soft shadows by formula (2).
+//!
+//! In a frame it takes three stages after the hits are known: `demand`
+//! (which (node, light) bits the shading points need), `fill` (compute the
+//! missing ones, the only writer of the masks) and `shade` (formula (2),
+//! with or without the point-to-node tests of LMM).
+
+pub mod demand;
+pub mod fill;
+pub mod interpolate;
+pub mod lattice;
+pub mod masks;
+pub mod spacing;
+
+use serde::Serialize;
+
+use lattice::Lattice;
+use masks::MaskStore;
+
+/// A light mesh with its masks; it outlives frames so masks are reused.
+#[derive(Clone, Debug)]
+pub struct LightMesh {
+    pub lattice: Lattice,
+    /// Interpolation radius in units of `h` (the paper's kI).
+    pub ki: f32,
+    masks: MaskStore,
+    /// Bytes the masks may take before a frame is refused.
+    memory_limit: usize,
+}
+
+/// Why the light mesh cannot serve a frame.
+#[derive(Debug, thiserror::Error)]
+pub enum LightMeshError {
+    #[error(
+        "the light mesh would need {needed_mib} MiB of node masks (limit {limit_mib} MiB) with h = {h} m; \
+         raise h or lightmesh.max_memory_mib"
+    )]
+    TooLarge {
+        needed_mib: usize,
+        limit_mib: usize,
+        h: f32,
+    },
+    #[error("h = {h} m is too small for a scene this far from its centre ({distance} m): node coordinates would overflow")]
+    OutOfRange { h: f32, distance: f32 },
+}
+
+/// What the light mesh did in one frame (the `lightmesh` object of the
+/// stats JSON).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct LightMeshStats {
+    pub h: f32,
+    pub ki: f32,
+    /// Nodes that had at least one bit computed this frame: the paper's N_LM.
+    pub nodes_computed: u64,
+    /// (node, light) bits computed this frame (one shadow segment each).
+    pub bits_computed: u64,
+    /// Bits this frame needed that earlier frames had computed.
+    pub bits_reused: u64,
+    /// Nodes with any valid bit after the frame.
+    pub nodes_cached: u64,
+    /// Mean nodes per shading point after steps 1–2.
+    pub mean_candidates: f64,
+    /// Mean size m of the interpolation set D_LM(P).
+    pub mean_interp_set: f64,
+    /// Mean step-3 (point-to-node) tests per point; 0 for LMM1.
+    pub mean_p2n_tests: f64,
+    /// Points shaded by formula (1) because their set was empty.
+    pub fallback_points: u64,
+}
+
+impl LightMesh {
+    pub fn new(lattice: Lattice, ki: f32, lights: usize, memory_limit: usize) -> LightMesh {
+        LightMesh {
+            lattice,
+            ki,
+            masks: MaskStore::new(lights),
+            memory_limit,
+        }
+    }
+
+    /// Radius r = kI·h of the interpolation ball.
+    pub fn radius(&self) -> f32 {
+        self.ki * self.lattice.h
+    }
+
+    pub fn masks(&self) -> &MaskStore {
+        &self.masks
+    }
+}

@@ -1,0 +1,156 @@
+//! The glTF metallic-roughness BRDF (the glTF 2.0 specification, appendix B):
+//! Lambert diffuse plus GGX specular with height-correlated Smith
+//! visibility, mixed by Schlick's Fresnel. It is the reflectance inside
+//! Omega(i, P) of the paper's formulas (1) and (2).
+
+use std::f32::consts::PI;
+
+use glam::Vec3;
+
+use super::material::SurfaceMaterial;
+
+/// Schlick's approximation of the Fresnel weight `(1 − cos)^5`.
+pub fn schlick_weight(cos_theta: f32) -> f32 {
+    (1.0 - cos_theta.clamp(0.0, 1.0)).powi(5)
+}
+
+/// The BRDF f(v, l) for unit normal `n`, unit view direction `v` and unit
+/// light direction `l`, all pointing away from the surface. Zero when
+/// either direction is below the surface. The part of the diffuse lobe that
+/// is transmitted (KHR_materials_transmission) is left to the refracted ray.
+pub fn evaluate(material: &SurfaceMaterial, n: Vec3, v: Vec3, l: Vec3) -> Vec3 {
+    let n_dot_l = n.dot(l);
+    let n_dot_v = n.dot(v);
+    if n_dot_l <= 0.0 || n_dot_v <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let h = (v + l).normalize_or_zero();
+    if h == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let n_dot_h = n.dot(h).max(0.0);
+    let v_dot_h = v.dot(h).max(0.0);
+
+    let roughness = material.highlight_roughness();
+    let alpha = roughness * roughness;
+    let specular = ggx_distribution(n_dot_h, alpha) * smith_visibility(n_dot_l, n_dot_v, alpha);
+    let fresnel = schlick_weight(v_dot_h);
+
+    let diffuse = material.base_color / PI * (1.0 - material.transmission);
+    let dielectric_f0 = 0.04 * material.specular;
+    let dielectric_fresnel = dielectric_f0 + (material.specular - dielectric_f0) * fresnel;
+    let dielectric =
+        diffuse * (1.0 - dielectric_fresnel) + Vec3::splat(specular * dielectric_fresnel);
+    let metal = specular * (material.base_color + (Vec3::ONE - material.base_color) * fresnel);
+    dielectric.lerp(metal, material.metallic)
+}
+
+/// Fresnel reflectance of a mirror reflection seen at `cos_theta`, the
+/// weight of the Whitted reflected ray (same mix as [`evaluate`]).
+pub fn mirror_reflectance(material: &SurfaceMaterial, cos_theta: f32) -> Vec3 {
+    let fresnel = schlick_weight(cos_theta);
+    let dielectric_f0 = 0.04 * material.specular;
+    let dielectric = dielectric_f0 + (material.specular - dielectric_f0) * fresnel;
+    let metal = material.base_color + (Vec3::ONE - material.base_color) * fresnel;
+    Vec3::splat(dielectric).lerp(metal, material.metallic)
+}
+
+fn ggx_distribution(n_dot_h: f32, alpha: f32) -> f32 {
+    let alpha2 = alpha * alpha;
+    let denominator = n_dot_h * n_dot_h * (alpha2 - 1.0) + 1.0;
+    alpha2 / (PI * denominator * denominator)
+}
+
+/// Height-correlated Smith G divided by 4 |n·l| |n·v|, as the spec writes it.
+fn smith_visibility(n_dot_l: f32, n_dot_v: f32, alpha: f32) -> f32 {
+    let alpha2 = alpha * alpha;
+    let ggx_v = n_dot_l * (n_dot_v * n_dot_v * (1.0 - alpha2) + alpha2).sqrt();
+    let ggx_l = n_dot_v * (n_dot_l * n_dot_l * (1.0 - alpha2) + alpha2).sqrt();
+    let sum = ggx_v + ggx_l;
+    if sum > 0.0 {
+        0.5 / sum
+    } else {
+        0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn material(metallic: f32, roughness: f32, specular: f32) -> SurfaceMaterial {
+        SurfaceMaterial {
+            base_color: Vec3::new(0.8, 0.6, 0.4),
+            metallic,
+            roughness,
+            specular,
+            transmission: 0.0,
+            ior: 1.5,
+            emissive: Vec3::ZERO,
+        }
+    }
+
+    #[test]
+    fn specular_weight_zero_is_exactly_lambert() {
+        let m = material(0.0, 0.5, 0.0);
+        let l = Vec3::new(0.3, 0.8, 0.1).normalize();
+        let f = evaluate(&m, Vec3::Y, Vec3::new(-0.2, 0.9, 0.3).normalize(), l);
+        assert_eq!(f, m.base_color / PI);
+    }
+
+    #[test]
+    fn below_the_horizon_reflects_nothing() {
+        let m = material(0.0, 0.5, 1.0);
+        assert_eq!(
+            evaluate(&m, Vec3::Y, Vec3::Y, Vec3::new(1.0, -0.01, 0.0).normalize()),
+            Vec3::ZERO
+        );
+        assert_eq!(evaluate(&m, Vec3::Y, Vec3::NEG_Y, Vec3::Y), Vec3::ZERO);
+    }
+
+    /// A white furnace: the directional albedo of a rough white dielectric
+    /// stays at or below 1 (energy is not created) for every view angle.
+    #[test]
+    fn brdf_does_not_create_energy() {
+        let mut m = material(0.0, 0.6, 1.0);
+        m.base_color = Vec3::ONE;
+        for view_degrees in [0.0f32, 30.0, 60.0, 85.0] {
+            let v = Vec3::new(
+                view_degrees.to_radians().sin(),
+                view_degrees.to_radians().cos(),
+                0.0,
+            );
+            let steps = 256;
+            let mut albedo = 0.0;
+            for i in 0..steps {
+                for j in 0..steps {
+                    let cos_theta = (i as f32 + 0.5) / steps as f32;
+                    let phi = 2.0 * PI * (j as f32 + 0.5) / steps as f32;
+                    let sin_theta = (1.0 - cos_theta * cos_theta).sqrt();
+                    let l = Vec3::new(sin_theta * phi.cos(), cos_theta, sin_theta * phi.sin());
+                    albedo += evaluate(&m, Vec3::Y, v, l).x * cos_theta;
+                }
+            }
+            albedo *= 2.0 * PI / (steps * steps) as f32;
+            assert!(
+                albedo <= 1.0 && albedo > 0.8,
+                "albedo {albedo} at {view_degrees}°"
+            );
+        }
+    }
+
+    #[test]
+    fn metal_mirror_reflectance_is_its_colour_at_normal_incidence() {
+        let m = material(1.0, 0.0, 1.0);
+        assert_eq!(mirror_reflectance(&m, 1.0), m.base_color);
+        let grazing = mirror_reflectance(&m, 0.0);
+        assert!((grazing - Vec3::ONE).abs().max_element() < 1e-6);
+    }
+
+    #[test]
+    fn perfect_mirror_highlight_is_finite() {
+        let m = material(1.0, 0.0, 1.0);
+        let f = evaluate(&m, Vec3::Y, Vec3::Y, Vec3::Y);
+        assert!(f.is_finite() && f.x > 0.0);
+    }
+}

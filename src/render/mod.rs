@@ -1,0 +1,32 @@
+//! Shading: cameras, lights, the glTF BRDF (Omega), the Whitted recursion
+//! and the integrators' per-point work. Nothing here knows which backend
+//! runs it or what time it is: a frame arrives as a [`FrameJob`].
+
+pub mod brdf;
+pub mod camera;
+pub mod frame;
+pub mod light;
+pub mod material;
+pub mod scatter;
+pub mod shading;
+pub mod surface;
+pub mod whitted;
+
+use crate::accel::World;
+use crate::scene::SceneDesc;
+use frame::FrameScene;
+
+/// Everything a backend needs to render one frame.
+#[derive(Clone, Copy)]
+pub struct FrameJob<'a> {
+    pub scene: &'a SceneDesc,
+    pub frame: &'a FrameScene,
+    pub world: &'a World,
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel: 1 traces the pixel centre, more jitter within
+    /// strata of the pixel.
+    pub spp: u32,
+    /// Deepest Whitted recursion (0: primary hits only).
+    pub max_depth: u32,
+}

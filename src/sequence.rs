@@ -1,0 +1,278 @@
+//! The frame loop: load a scene once, build its ray-tracing world once, then
+//! for each requested frame pose the scene, render it on the backend and
+//! write the frame. This is the only place that knows about time; the
+//! integrators see one frame at a time.
+
+use std::path::Path;
+use std::time::Instant;
+
+use crate::accel::{World, WorldObject};
+use crate::backend::cpu::{BackendError, CpuBackend, Shading};
+use crate::import::{self, ImportError};
+use crate::lightmesh::interpolate::Variant;
+use crate::lightmesh::lattice::Lattice;
+use crate::lightmesh::{spacing, LightMesh, LightMeshError};
+use crate::output::{self, FramePattern, OutputError};
+use crate::render::frame::{CameraChoice, FrameScene, PlaceError, SceneBounds};
+use crate::render::FrameJob;
+use crate::scene::pose::Pose;
+use crate::scene::SceneDesc;
+use crate::schedule::FrameSet;
+use crate::settings::{Method, Settings};
+use crate::stats::{FrameStats, RunStats};
+
+/// Why a run stopped. `is_bad_input` separates the user's mistakes (exit
+/// code 2) from failures of the machine (exit code 1).
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    #[error(transparent)]
+    Import(#[from] ImportError),
+    #[error("{file}: {source}")]
+    Place { file: String, source: PlaceError },
+    #[error("--method {0} is not available yet")]
+    MethodUnavailable(Method),
+    #[error("{file}: {source}")]
+    LightMesh {
+        file: String,
+        source: LightMeshError,
+    },
+    #[error("the output pattern '{0}' has no '#' placeholder, so several frames would overwrite one file")]
+    PatternWithoutPlaceholder(String),
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    #[error(transparent)]
+    Backend(#[from] BackendError),
+}
+
+impl RunError {
+    pub fn is_bad_input(&self) -> bool {
+        matches!(
+            self,
+            RunError::Import(_)
+                | RunError::Place { .. }
+                | RunError::MethodUnavailable(_)
+                | RunError::LightMesh { .. }
+                | RunError::PatternWithoutPlaceholder(_)
+        )
+    }
+}
+
+/// What one run renders and where it goes.
+pub struct Job<'a> {
+    pub scene_path: &'a Path,
+    pub settings: &'a Settings,
+    pub frames: &'a FrameSet,
+    pub pattern: &'a FramePattern,
+}
+
+/// A frame has been written: what `on_frame` hears, for progress reports.
+pub struct FrameDone<'a> {
+    pub stats: &'a FrameStats,
+    pub path: &'a Path,
+    /// Set once, for the first frame, when the scene brought no camera.
+    pub automatic_camera: bool,
+}
+
+/// A loaded scene with its world built, ready to render frames.
+pub struct Sequence {
+    scene: SceneDesc,
+    scene_file: String,
+    world: World,
+    anchor: glam::DVec3,
+    /// Radius of the scene's bounding sphere at rest, in metres.
+    scene_radius: f32,
+    /// The light mesh, made on the first LMM frame and kept so that later
+    /// frames reuse its masks.
+    light_mesh: Option<LightMesh>,
+}
+
+impl Sequence {
+    pub fn load(path: &Path) -> Result<Sequence, RunError> {
+        let scene = import::load(path)?;
+        Sequence::new(scene, path.display().to_string())
+    }
+
+    /// A sequence over a scene built in memory; `scene_file` names it in
+    /// error messages.
+    pub fn new(scene: SceneDesc, scene_file: String) -> Result<Sequence, RunError> {
+        let rest = Pose::rest(&scene);
+        // The anchor stays put for the whole sequence, so static geometry is
+        // placed (and its BVH built) once.
+        let bounds = SceneBounds::of(&scene, &rest);
+        let anchor = bounds.map_or(glam::DVec3::ZERO, |b| b.centre());
+        let scene_radius = bounds.map_or(0.0, |b| b.radius() as f32);
+        let placed = FrameScene::place(
+            &scene,
+            &rest,
+            anchor,
+            CameraChoice::First,
+            &Default::default(),
+        )
+        .map_err(|source| RunError::Place {
+            file: scene_file.clone(),
+            source,
+        })?;
+        let world = build_world(&scene, &placed);
+        Ok(Sequence {
+            scene,
+            scene_file,
+            world,
+            anchor,
+            scene_radius,
+            light_mesh: None,
+        })
+    }
+
+    pub fn scene(&self) -> &SceneDesc {
+        &self.scene
+    }
+
+    /// Poses the scene for `frame` and places it in render space.
+    pub fn place(&self, settings: &Settings) -> Result<FrameScene, RunError> {
+        let camera = match &settings.camera {
+            Some(name) => CameraChoice::Named(name),
+            None => CameraChoice::First,
+        };
+        FrameScene::place(
+            &self.scene,
+            &Pose::rest(&self.scene),
+            self.anchor,
+            camera,
+            &settings.lamps,
+        )
+        .map_err(|source| RunError::Place {
+            file: self.scene_file.clone(),
+            source,
+        })
+    }
+
+    /// Renders one frame into an image, filling `stats`.
+    pub fn render(
+        &mut self,
+        backend: &CpuBackend,
+        placed: &FrameScene,
+        settings: &Settings,
+        stats: &mut FrameStats,
+    ) -> Result<output::Image, RunError> {
+        if matches!(settings.method, Method::Lmm | Method::Lmm1) {
+            self.prepare_light_mesh(placed, settings)?;
+        }
+        let mut shading = match (settings.method, self.light_mesh.as_mut()) {
+            (Method::Lmm | Method::Lmm1, Some(mesh)) => Shading::LightMesh {
+                mesh,
+                variant: if settings.method == Method::Lmm {
+                    Variant::Lmm
+                } else {
+                    Variant::Lmm1
+                },
+            },
+            (Method::Area, _) => return Err(RunError::MethodUnavailable(settings.method)),
+            _ => Shading::Whitted,
+        };
+        let job = FrameJob {
+            scene: &self.scene,
+            frame: placed,
+            world: &self.world,
+            width: settings.width,
+            height: settings.height,
+            spp: settings.spp,
+            max_depth: settings.max_depth,
+        };
+        backend
+            .render(&job, &mut shading, stats)
+            .map_err(|source| RunError::LightMesh {
+                file: self.scene_file.clone(),
+                source,
+            })
+    }
+
+    /// The sequence's light mesh, made on first use with `h` from the
+    /// settings or from the lamp radii (see `lightmesh::spacing`).
+    fn prepare_light_mesh(
+        &mut self,
+        placed: &FrameScene,
+        settings: &Settings,
+    ) -> Result<(), RunError> {
+        if self.light_mesh.is_none() {
+            let ki = settings.lightmesh.ki;
+            let h = settings
+                .lightmesh
+                .h
+                .unwrap_or_else(|| spacing::default_h(&placed.lights, ki, 2.0 * self.scene_radius));
+            let lattice = Lattice::new(h);
+            let reach = self.scene_radius + ki * h;
+            if !lattice.covers(glam::Vec3::ZERO, reach) {
+                return Err(RunError::LightMesh {
+                    file: self.scene_file.clone(),
+                    source: LightMeshError::OutOfRange { h, distance: reach },
+                });
+            }
+            let limit = settings.lightmesh.max_memory_mib.saturating_mul(1 << 20);
+            self.light_mesh = Some(LightMesh::new(lattice, ki, placed.lights.len(), limit));
+        }
+        Ok(())
+    }
+}
+
+/// The two-level world over every mesh instance of `placed`.
+fn build_world(scene: &SceneDesc, placed: &FrameScene) -> World {
+    let objects: Vec<WorldObject> = placed
+        .objects
+        .iter()
+        .map(|object| {
+            let mesh = &scene.meshes[object.mesh];
+            WorldObject {
+                positions: &mesh.positions,
+                triangles: &mesh.triangles,
+                to_render: object.to_render,
+                dynamic: object.dynamic,
+            }
+        })
+        .collect();
+    World::build(&objects)
+}
+
+/// Renders every frame of `job`, writing each as it is done, and reports
+/// each to `on_frame`.
+pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, RunError> {
+    let started = Instant::now();
+    let settings = job.settings;
+    if job.frames.len() > 1 && !job.pattern.has_placeholder() {
+        return Err(RunError::PatternWithoutPlaceholder(
+            job.pattern.path_for(0).display().to_string(),
+        ));
+    }
+    let backend = CpuBackend::new(settings.threads)?;
+    let mut sequence = Sequence::load(job.scene_path)?;
+    let mut run = RunStats {
+        threads: backend.threads(),
+        method: settings.method.to_string(),
+        ..RunStats::default()
+    };
+    for (index, &frame) in job.frames.frames().iter().enumerate() {
+        let frame_started = Instant::now();
+        let mut stats = FrameStats {
+            frame,
+            ..FrameStats::default()
+        };
+        let placed = sequence.place(settings)?;
+        let image = sequence.render(&backend, &placed, settings, &mut stats)?;
+
+        let write_started = Instant::now();
+        let path = job.pattern.path_for(frame);
+        output::write_exr(&path, &image, settings.exr_precision)?;
+        if settings.png {
+            output::write_png_preview(&job.pattern.png_path_for(frame), &image)?;
+        }
+        stats.add_stage_time("output", write_started.elapsed().as_secs_f64());
+        stats.seconds = frame_started.elapsed().as_secs_f64();
+        on_frame(FrameDone {
+            stats: &stats,
+            path: &path,
+            automatic_camera: index == 0 && placed.automatic_camera,
+        });
+        run.frames.push(stats);
+    }
+    run.total_seconds = started.elapsed().as_secs_f64();
+    Ok(run)
+}

@@ -1,0 +1,183 @@
+//! Scenes built in memory for the renderer's tests: quads, lights and
+//! cameras as plain `SceneDesc` data, so each test states its geometry.
+#![allow(dead_code)] // each test file uses its own subset
+
+use glam::{DMat4, DQuat, DVec3, Vec3, Vec4};
+use lmanim::output::Image;
+use lmanim::scene::{Camera, Light, LightKind, Material, Mesh, Node, Projection, SceneDesc};
+use lmanim::sequence::Sequence;
+use lmanim::settings::Settings;
+use lmanim::stats::FrameStats;
+
+pub fn empty_scene() -> SceneDesc {
+    SceneDesc {
+        name: "test".into(),
+        ..SceneDesc::default()
+    }
+}
+
+/// A purely Lambertian material (KHR_materials_specular factor 0).
+pub fn lambert(albedo: Vec3) -> Material {
+    Material {
+        base_color: albedo.extend(1.0),
+        metallic: 0.0,
+        roughness: 1.0,
+        specular: 0.0,
+        ..Material::default()
+    }
+}
+
+pub fn add_material(scene: &mut SceneDesc, material: Material) -> u32 {
+    scene.materials.push(material);
+    (scene.materials.len() - 1) as u32
+}
+
+/// A root node with the given transform and optional mesh/light/camera.
+pub fn add_node(scene: &mut SceneDesc, local: DMat4) -> usize {
+    scene.nodes.push(Node {
+        local,
+        ..Node::default()
+    });
+    let index = scene.nodes.len() - 1;
+    scene.roots.push(index);
+    index
+}
+
+/// A mesh made of quads given by their four corners (counter-clockwise seen
+/// from the side the normal faces), each split into `cells × cells` squares.
+pub fn add_quads(scene: &mut SceneDesc, quads: &[[Vec3; 4]], cells: u32, material: u32) -> usize {
+    let mut mesh = Mesh::default();
+    for corners in quads {
+        let normal = (corners[1] - corners[0])
+            .cross(corners[3] - corners[0])
+            .normalize();
+        let base = mesh.positions.len() as u32;
+        for j in 0..=cells {
+            for i in 0..=cells {
+                let (s, t) = (i as f32 / cells as f32, j as f32 / cells as f32);
+                let bottom = corners[0].lerp(corners[1], s);
+                let top = corners[3].lerp(corners[2], s);
+                mesh.positions.push(bottom.lerp(top, t));
+                mesh.normals.push(normal);
+            }
+        }
+        let row = cells + 1;
+        for j in 0..cells {
+            for i in 0..cells {
+                let a = base + j * row + i;
+                mesh.triangles.push([a, a + 1, a + row + 1]);
+                mesh.triangles.push([a, a + row + 1, a + row]);
+                mesh.triangle_materials.extend([material, material]);
+            }
+        }
+    }
+    scene.meshes.push(mesh);
+    let mesh = scene.meshes.len() - 1;
+    let node = add_node(scene, DMat4::IDENTITY);
+    scene.nodes[node].mesh = Some(mesh);
+    node
+}
+
+/// A horizontal square at height `y`, half-size `half`, facing +Y.
+pub fn floor_quad(y: f32, half: f32) -> [Vec3; 4] {
+    [
+        Vec3::new(-half, y, half),
+        Vec3::new(half, y, half),
+        Vec3::new(half, y, -half),
+        Vec3::new(-half, y, -half),
+    ]
+}
+
+pub fn add_light(scene: &mut SceneDesc, kind: LightKind, intensity: f32, local: DMat4) -> usize {
+    scene.lights.push(Light {
+        name: Some(format!("light{}", scene.lights.len())),
+        kind,
+        color: Vec3::ONE,
+        intensity,
+        range: None,
+        radius: None,
+    });
+    let node = add_node(scene, local);
+    scene.nodes[node].light = Some(scene.lights.len() - 1);
+    node
+}
+
+pub fn add_camera(scene: &mut SceneDesc, projection: Projection, local: DMat4) -> usize {
+    scene.cameras.push(Camera {
+        name: Some("cam".into()),
+        projection,
+    });
+    let node = add_node(scene, local);
+    scene.nodes[node].camera = Some(scene.cameras.len() - 1);
+    node
+}
+
+/// An orthographic camera at height `y` looking straight down (−Y), image
+/// top towards −Z, seeing `2·ymag` metres vertically.
+pub fn add_top_camera(scene: &mut SceneDesc, y: f64, ymag: f32) -> usize {
+    add_camera(
+        scene,
+        Projection::Orthographic {
+            xmag: ymag,
+            ymag,
+            znear: 0.0,
+            zfar: 1e4,
+        },
+        look_down(y),
+    )
+}
+
+pub fn look_down(y: f64) -> DMat4 {
+    DMat4::from_rotation_translation(
+        DQuat::from_rotation_x(-std::f64::consts::FRAC_PI_2),
+        DVec3::new(0.0, y, 0.0),
+    )
+}
+
+/// World (x, z) seen by pixel (px, py)'s centre under [`add_top_camera`].
+pub fn top_camera_ground(px: u32, py: u32, width: u32, height: u32, ymag: f32) -> (f32, f32) {
+    let aspect = width as f32 / height as f32;
+    let ndc_x = 2.0 * (px as f32 + 0.5) / width as f32 - 1.0;
+    let ndc_y = 1.0 - 2.0 * (py as f32 + 0.5) / height as f32;
+    (ndc_x * ymag * aspect, -ndc_y * ymag)
+}
+
+pub fn settings(width: u32, height: u32) -> Settings {
+    Settings {
+        width,
+        height,
+        ..Settings::default()
+    }
+}
+
+/// A camera node transform at `eye` looking at `target`, +Y up.
+pub fn look_at(eye: DVec3, target: DVec3) -> DMat4 {
+    let backward = (eye - target).normalize();
+    let right = DVec3::Y.cross(backward).normalize();
+    let up = backward.cross(right);
+    DMat4::from_cols(
+        right.extend(0.0),
+        up.extend(0.0),
+        backward.extend(0.0),
+        eye.extend(1.0),
+    )
+}
+
+pub fn render(scene: SceneDesc, settings: &Settings) -> Image {
+    render_with_stats(scene, settings).0
+}
+
+pub fn render_with_stats(scene: SceneDesc, settings: &Settings) -> (Image, FrameStats) {
+    let mut sequence = Sequence::new(scene, "test".into()).expect("scene places");
+    let backend = lmanim::backend::CpuBackend::new(settings.threads).expect("thread pool");
+    let placed = sequence.place(settings).expect("camera");
+    let mut stats = FrameStats::default();
+    let image = sequence
+        .render(&backend, &placed, settings, &mut stats)
+        .expect("frame renders");
+    (image, stats)
+}
+
+pub fn pixel(image: &Image, x: u32, y: u32) -> Vec4 {
+    image.pixels[(y * image.width + x) as usize]
+}
