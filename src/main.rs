@@ -144,11 +144,24 @@ fn run(cli: &Cli) -> Result<(), Failure> {
         pattern: &pattern,
     };
     let stats = sequence::run(&job, |done| {
-        if done.automatic_camera {
+        if done.index == 0 && done.automatic_camera {
             progress.suspend(|| {
                 log::warn!(
                     "{} has no camera: rendering through an automatic framing camera",
                     cli.scene.display()
+                )
+            });
+        }
+        if let (0, Some(mesh), false) = (done.index, done.stats.lightmesh, cli.quiet) {
+            let source = if settings.lightmesh.h.is_some() {
+                "set"
+            } else {
+                "from the lamp radii"
+            };
+            progress.suspend(|| {
+                eprintln!(
+                    "light mesh: h = {:.4} m ({source}), kI = {}",
+                    mesh.h, mesh.ki
                 )
             });
         }

@@ -29,8 +29,6 @@ pub enum RunError {
     Import(#[from] ImportError),
     #[error("{file}: {source}")]
     Place { file: String, source: PlaceError },
-    #[error("--method {0} is not available yet")]
-    MethodUnavailable(Method),
     #[error("{file}: {source}")]
     LightMesh {
         file: String,
@@ -50,7 +48,6 @@ impl RunError {
             self,
             RunError::Import(_)
                 | RunError::Place { .. }
-                | RunError::MethodUnavailable(_)
                 | RunError::LightMesh { .. }
                 | RunError::PatternWithoutPlaceholder(_)
         )
@@ -67,9 +64,11 @@ pub struct Job<'a> {
 
 /// A frame has been written: what `on_frame` hears, for progress reports.
 pub struct FrameDone<'a> {
+    /// Position of the frame in the run (0 for the first).
+    pub index: usize,
     pub stats: &'a FrameStats,
     pub path: &'a Path,
-    /// Set once, for the first frame, when the scene brought no camera.
+    /// The scene brought no camera; an automatic one framed it.
     pub automatic_camera: bool,
 }
 
@@ -166,7 +165,7 @@ impl Sequence {
                     Variant::Lmm1
                 },
             },
-            (Method::Area, _) => return Err(RunError::MethodUnavailable(settings.method)),
+            (Method::Area, _) => Shading::Area,
             _ => Shading::Whitted,
         };
         let job = FrameJob {
@@ -267,9 +266,10 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
         stats.add_stage_time("output", write_started.elapsed().as_secs_f64());
         stats.seconds = frame_started.elapsed().as_secs_f64();
         on_frame(FrameDone {
+            index,
             stats: &stats,
             path: &path,
-            automatic_camera: index == 0 && placed.automatic_camera,
+            automatic_camera: placed.automatic_camera,
         });
         run.frames.push(stats);
     }

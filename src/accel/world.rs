@@ -1,8 +1,21 @@
-//! STUB: to be written (two-level world).
+//! The two-level world the renderer traces against, in render space: all
+//! static objects merged into one BVH (built once), plus one object-space
+//! BVH per dynamic object under a small top level over their render-space
+//! bounds that is rebuilt whenever one of them moves. Static and dynamic
+//! visibility can be asked separately, because the light mesh keeps them in
+//! separate layers (static bits are cached; dynamic ones are re-tested).
+
+use std::time::Duration;
 
 use glam::{Affine3A, Vec2, Vec3};
+use obvhs::{aabb::Aabb, bvh2::builder::build_bvh2, bvh2::Bvh2, BvhBuildParams};
 
-use super::Ray;
+use super::bounds::Bounds;
+use super::instance::Instance;
+use super::mesh_bvh::{BuildTriangle, MeshBvh, MeshHit, TriangleRef};
+use super::node_test::TraversalRay;
+use super::traverse::traverse_binary;
+use super::{Ray, BUILD_PARAMS, STATIC_LAYOUT};
 
 /// One mesh placed in render space, as the world is built from it.
 #[derive(Clone, Copy, Debug)]
@@ -13,25 +26,247 @@ pub struct WorldObject<'a> {
     pub dynamic: bool,
 }
 
+/// The closest hit of a ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     pub t: f32,
+    /// Index into the slice the world was built from.
     pub object: u32,
+    /// Index into that object's `triangles`.
     pub triangle: u32,
+    /// `(u, v)` with `P = (1 - u - v) a + u b + v c`.
     pub barycentric: Vec2,
+    /// Unit, render space, along `(b - a) × (c - a)` of the placed triangle;
+    /// the side to offset new origins into is `±` this (see
+    /// [`offset_ray_origin`](super::offset_ray_origin)).
     pub geometric_normal: Vec3,
 }
 
-pub struct World {}
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum WorldError {
+    #[error("object {0} is not in the world")]
+    UnknownObject(usize),
+    #[error("object {0} is static; only dynamic objects can move or deform")]
+    NotDynamic(usize),
+    #[error("object {object} has {expected} vertices, {given} positions were given")]
+    PositionCount {
+        object: usize,
+        expected: usize,
+        given: usize,
+    },
+}
+
+enum Placement {
+    /// Merged into the static BVH; its render-space bounds.
+    Static(Bounds),
+    /// Index into `World::instances`.
+    Dynamic(usize),
+}
+
+pub struct World {
+    static_bvh: MeshBvh,
+    static_bounds: Bounds,
+    placements: Vec<Placement>,
+    instances: Vec<Instance>,
+    top: TopLevel,
+}
 
 impl World {
-    pub fn build(_objects: &[WorldObject]) -> World {
-        todo!()
+    /// Builds the world. Triangles with out-of-range vertex indices are
+    /// dropped (with a warning), zero-area ones silently: neither can be hit.
+    pub fn build(objects: &[WorldObject]) -> World {
+        let mut static_triangles = Vec::new();
+        let mut placements = Vec::with_capacity(objects.len());
+        let mut instances = Vec::new();
+        for (index, object) in objects.iter().enumerate() {
+            let triangles = valid_triangles(index, object);
+            if object.dynamic {
+                placements.push(Placement::Dynamic(instances.len()));
+                let (positions, to_render) = (object.positions, object.to_render);
+                instances.push(Instance::new(index as u32, positions, triangles, to_render));
+                continue;
+            }
+            let placed: Vec<Vec3> = object
+                .positions
+                .iter()
+                .map(|&p| object.to_render.transform_point3(p))
+                .collect();
+            let first = static_triangles.len();
+            static_triangles.extend(triangles.iter().enumerate().map(|(i, tri)| BuildTriangle {
+                vertices: tri.map(|v| placed[v as usize]),
+                source: TriangleRef {
+                    object: index as u32,
+                    triangle: i as u32,
+                },
+            }));
+            let bounds =
+                Bounds::from_points(static_triangles[first..].iter().flat_map(|t| t.vertices));
+            placements.push(Placement::Static(bounds));
+        }
+        let static_bvh = MeshBvh::build(&static_triangles, STATIC_LAYOUT, BUILD_PARAMS);
+        let static_bounds = Bounds::from_points(static_bvh.triangles().flat_map(|(v, _)| v));
+        let top = TopLevel::build(&instances);
+        World {
+            static_bvh,
+            static_bounds,
+            placements,
+            instances,
+            top,
+        }
     }
-    pub fn closest_hit(&self, _ray: &Ray) -> Option<Hit> {
-        todo!()
+
+    /// The closest hit in `(0, t_max)`; of hits at exactly equal `t`, the one
+    /// with the lowest `(object, triangle)`, so results never depend on tree
+    /// shape or thread count.
+    pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        let mut best = None;
+        self.static_bvh.closest_hit(ray, &mut best);
+        self.top
+            .visit(ray, best.map_or(ray.t_max, |b| b.t), |i, t_cull| {
+                self.instances[i].closest_hit(ray, &mut best);
+                *t_cull = best.map_or(*t_cull, |b| b.t);
+                true
+            });
+        best.map(|h: MeshHit| Hit {
+            t: h.t,
+            object: h.source.object,
+            triangle: h.source.triangle,
+            barycentric: h.barycentric,
+            geometric_normal: h.normal,
+        })
     }
-    pub fn occluded(&self, _ray: &Ray) -> bool {
-        todo!()
+
+    /// Whether anything, static or dynamic, lies on the ray in `(0, t_max)`.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        // The dynamic part is the small one: try it first.
+        self.occluded_dynamic(ray) || self.occluded_static(ray)
+    }
+
+    /// Whether static geometry lies on the ray in `(0, t_max)`.
+    pub fn occluded_static(&self, ray: &Ray) -> bool {
+        self.static_bvh.occluded(ray)
+    }
+
+    /// Whether a dynamic object lies on the ray in `(0, t_max)`.
+    pub fn occluded_dynamic(&self, ray: &Ray) -> bool {
+        let mut hit = false;
+        self.top.visit(ray, ray.t_max, |i, _| {
+            hit = self.instances[i].occluded(ray);
+            !hit
+        });
+        hit
+    }
+
+    /// Places a dynamic object anew (a rigid move); rebuilds only the top
+    /// level, `O(d log d)` for `d` dynamic objects.
+    pub fn set_transform(&mut self, object: usize, to_render: Affine3A) -> Result<(), WorldError> {
+        let i = self.dynamic_index(object)?;
+        self.instances[i].set_transform(to_render);
+        self.top = TopLevel::build(&self.instances);
+        Ok(())
+    }
+
+    /// New object-space positions for a deformed dynamic object (skinning,
+    /// morph targets): its BVH is refitted, or rebuilt when triangles gain or
+    /// lose area; then the top level is rebuilt.
+    pub fn set_positions(&mut self, object: usize, positions: &[Vec3]) -> Result<(), WorldError> {
+        let i = self.dynamic_index(object)?;
+        let expected = self.instances[i].vertex_count();
+        if positions.len() != expected {
+            return Err(WorldError::PositionCount {
+                object,
+                expected,
+                given: positions.len(),
+            });
+        }
+        self.instances[i].set_positions(positions);
+        self.top = TopLevel::build(&self.instances);
+        Ok(())
+    }
+
+    /// Render-space bounds of everything in the world now.
+    pub fn bounds(&self) -> Bounds {
+        (self.instances.iter()).fold(self.static_bounds, |b, i| b.union(i.render_bounds()))
+    }
+
+    /// Render-space bounds of one object's triangles now; `None` for an index
+    /// not in the world. Empty ([`Bounds::is_empty`]) if it has no triangle.
+    pub fn object_bounds(&self, object: usize) -> Option<Bounds> {
+        match self.placements.get(object)? {
+            Placement::Static(bounds) => Some(*bounds),
+            Placement::Dynamic(i) => Some(self.instances[*i].render_bounds()),
+        }
+    }
+
+    /// Triangles that can be hit (zero-area and invalid ones excluded).
+    pub fn triangle_count(&self) -> usize {
+        self.static_bvh.len()
+            + self
+                .instances
+                .iter()
+                .map(Instance::triangle_count)
+                .sum::<usize>()
+    }
+
+    fn dynamic_index(&self, object: usize) -> Result<usize, WorldError> {
+        match self.placements.get(object) {
+            None => Err(WorldError::UnknownObject(object)),
+            Some(Placement::Static(_)) => Err(WorldError::NotDynamic(object)),
+            Some(Placement::Dynamic(i)) => Ok(*i),
+        }
     }
 }
+
+/// The object's triangles whose indices are all in range.
+fn valid_triangles(index: usize, object: &WorldObject) -> Vec<[u32; 3]> {
+    let n = object.positions.len();
+    let valid: Vec<[u32; 3]> = (object.triangles.iter())
+        .filter(|t| t.iter().all(|&v| (v as usize) < n))
+        .copied()
+        .collect();
+    let dropped = object.triangles.len() - valid.len();
+    if dropped > 0 {
+        log::warn!("object {index}: {dropped} triangles index past its {n} vertices; dropped");
+    }
+    valid
+}
+
+/// A BVH over the render-space bounds of the dynamic instances that have
+/// triangles.
+struct TopLevel {
+    bvh: Bvh2,
+    /// Instance index of each primitive of `bvh`.
+    members: Vec<usize>,
+}
+
+impl TopLevel {
+    fn build(instances: &[Instance]) -> TopLevel {
+        let (members, aabbs): (Vec<usize>, Vec<Aabb>) = (instances.iter().enumerate())
+            .map(|(i, inst)| (i, inst.render_bounds()))
+            .filter(|(_, b)| !b.is_empty())
+            .map(|(i, b)| (i, Aabb::new(b.min.into(), b.max.into())))
+            .unzip();
+        let bvh = if aabbs.is_empty() {
+            Bvh2::default()
+        } else {
+            build_bvh2(&aabbs, TOP_LEVEL_PARAMS, &mut Duration::default())
+        };
+        TopLevel { bvh, members }
+    }
+
+    /// Calls `visit` with the index of each instance whose bounds the ray
+    /// meets before `t_cull`, as [`traverse_binary`] does.
+    fn visit(&self, ray: &Ray, t_cull: f32, mut visit: impl FnMut(usize, &mut f32) -> bool) {
+        let traversal = TraversalRay::new(ray.origin, ray.direction);
+        traverse_binary(&self.bvh, &traversal, t_cull, |slot, t_cull| {
+            visit(
+                self.members[self.bvh.primitive_indices[slot] as usize],
+                t_cull,
+            )
+        });
+    }
+}
+
+/// The top level is small and rebuilt often: build fast, one instance per
+/// leaf.
+const TOP_LEVEL_PARAMS: BvhBuildParams = BvhBuildParams::fastest_build();

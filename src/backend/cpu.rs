@@ -5,7 +5,8 @@
 //! Stages (DESIGN.md, "One frame, as stages"): `primary` (camera rays over
 //! 16×16 tiles), `secondary` (the Whitted recursion, level by level), for
 //! the light-mesh methods `demand` and `fill` (node masks), then `shade`
-//! (formula (1) or (2) per shading point) and `resolve` (samples to pixels).
+//! (formula (1), formula (2) or the spherical-lamp reference per shading
+//! point) and `resolve` (samples to pixels).
 //! Every stage collects in a fixed order and sums sequentially, so the image
 //! is the same for any thread count.
 
@@ -14,14 +15,14 @@ use std::time::Instant;
 use glam::{UVec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::sampling::film_position;
+use super::sampling::{film_position, lamp_sample};
 use crate::accel::Ray;
 use crate::lightmesh::interpolate::{PointCounts, Scratch, Variant};
 use crate::lightmesh::{LightMesh, LightMeshError, LightMeshStats};
 use crate::output::Image;
 use crate::render::scatter::secondary_rays;
 use crate::render::surface::ShadingPoint;
-use crate::render::{whitted, FrameJob};
+use crate::render::{area, whitted, FrameJob};
 use crate::stats::FrameStats;
 
 const TILE: u32 = 16;
@@ -108,6 +109,9 @@ pub enum Shading<'a> {
         mesh: &'a mut LightMesh,
         variant: Variant,
     },
+    /// Spherical lamps sampled by Monte Carlo, one shadow ray per point and
+    /// light: the soft-shadow reference.
+    Area,
 }
 
 /// Rows of the image split into bands of whole tile rows.
@@ -162,6 +166,29 @@ fn render_band(
                 .par_iter()
                 .map(|point| {
                     let (direct, shadow_rays) = whitted::direct_light(point, lights, job.world);
+                    let counts = PointCounts {
+                        shadow_rays,
+                        ..PointCounts::default()
+                    };
+                    (point.weight * (point.emitted() + direct), counts)
+                })
+                .collect();
+            stats.add_stage_time("shade", start.elapsed().as_secs_f64());
+            shaded
+        }
+        Shading::Area => {
+            let start = Instant::now();
+            // Lamp samples are seeded by the sample's index in the whole
+            // image; `point.sample` counts from the band's first row.
+            let band_start = rows.start as u64 * job.width as u64 * job.spp as u64;
+            let shaded = points
+                .par_iter()
+                .map(|point| {
+                    let sample = band_start + point.sample as u64;
+                    let (direct, shadow_rays) =
+                        area::direct_light(point, lights, job.world, |light| {
+                            lamp_sample(sample, job.spp, light, point.depth)
+                        });
                     let counts = PointCounts {
                         shadow_rays,
                         ..PointCounts::default()

@@ -45,20 +45,25 @@ impl Lattice {
 
     /// Steps 1 and 2 of the paper: the nodes `x` with `|x − p| ≤ radius` and
     /// `(n, x − p) > 0`, appended to `out` in a fixed order (k, j, i).
-    /// A node exactly on the tangent plane (including `p` itself when it is
-    /// a node) fails step 2: it is not on the visible side.
+    /// A node on the tangent plane (including `p` itself when it is a node)
+    /// fails step 2: it is not on the visible side. "On" allows for the
+    /// rounding of node positions and surface points (a few ULPs of the
+    /// coordinates), so a floor lying on a lattice plane loses all of its
+    /// in-plane nodes rather than a random half of them.
     pub fn half_ball(&self, p: Vec3, n: Vec3, radius: f32, out: &mut Vec<IVec3>) {
         let local = (p - self.origin) / self.h;
         let reach = radius / self.h;
         let low = (local - Vec3::splat(reach)).ceil().as_ivec3();
         let high = (local + Vec3::splat(reach)).floor().as_ivec3();
         let radius_squared = radius * radius;
+        let on_plane =
+            8.0 * f32::EPSILON * (p.abs().max_element() + self.origin.abs().max_element() + radius);
         for k in low.z..=high.z {
             for j in low.y..=high.y {
                 for i in low.x..=high.x {
                     let node = IVec3::new(i, j, k);
                     let offset = self.node_position(node) - p;
-                    if offset.length_squared() <= radius_squared && n.dot(offset) > 0.0 {
+                    if offset.length_squared() <= radius_squared && n.dot(offset) > on_plane {
                         out.push(node);
                     }
                 }

@@ -1,6 +1,22 @@
-//! STUB: EXR frames, PNG previews, frame-name patterns, atomic writes.
+//! The end of a frame's data flow: rendered [`Image`]s become files. EXR
+//! frames hold linear radiance (half floats by default), PNG previews are
+//! tone-mapped and sRGB-encoded, frame names come from a `#` pattern, and
+//! storyboards get a contact sheet. Every file is written atomically, so a
+//! crashed or killed render never leaves a half-written frame behind.
 
-use std::path::{Path, PathBuf};
+mod atomic;
+mod contact_sheet;
+mod error;
+mod exr;
+mod pattern;
+mod png;
+
+pub use atomic::write_atomically;
+pub use contact_sheet::contact_sheet;
+pub use error::OutputError;
+pub use exr::{read_exr, write_exr};
+pub use pattern::FramePattern;
+pub use png::{tone_map, write_png_preview};
 
 use glam::Vec4;
 
@@ -12,44 +28,49 @@ pub struct Image {
     pub pixels: Vec<Vec4>,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+impl Image {
+    /// An image of one colour, e.g. the background of a contact sheet.
+    pub fn filled(width: u32, height: u32, colour: Vec4) -> Image {
+        Image {
+            width,
+            height,
+            pixels: vec![colour; width as usize * height as usize],
+        }
+    }
+
+    /// The pixel at column `x`, row `y` (row 0 is the top).
+    ///
+    /// # Panics
+    /// When `(x, y)` lies outside the image: callers index in bounds.
+    pub fn pixel(&self, x: u32, y: u32) -> Vec4 {
+        self.pixels[y as usize * self.width as usize + x as usize]
+    }
+
+    /// Whether `pixels` holds exactly `width * height` values; writers check
+    /// this before touching the disk so a bad buffer is a clear error, not a
+    /// panic halfway through an encoder.
+    fn has_consistent_size(&self) -> bool {
+        self.pixels.len() as u64 == u64::from(self.width) * u64::from(self.height)
+    }
+}
+
+/// Sample type of the EXR channels. Half keeps frames small and holds the
+/// whole range a render produces (up to 65504, ~3 significant digits); Float
+/// is for references that tests compare against exactly.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
 pub enum ExrPrecision {
     #[default]
     Half,
     Float,
-}
-
-#[derive(Debug, thiserror::Error)]
-#[error("{path}: {fault}")]
-pub struct OutputError {
-    pub path: PathBuf,
-    pub fault: String,
-}
-
-pub fn write_exr(
-    _path: &Path,
-    _image: &Image,
-    _precision: ExrPrecision,
-) -> Result<(), OutputError> {
-    todo!()
-}
-
-pub fn write_png_preview(_path: &Path, _image: &Image) -> Result<(), OutputError> {
-    todo!()
-}
-
-pub fn read_exr(_path: &Path) -> Result<Image, OutputError> {
-    todo!()
-}
-
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct FramePattern {}
-
-impl FramePattern {
-    pub fn parse(_pattern: &str) -> Result<FramePattern, String> {
-        todo!()
-    }
-    pub fn path_for(&self, _frame: u32) -> PathBuf {
-        todo!()
-    }
 }

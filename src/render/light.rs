@@ -119,7 +119,7 @@ impl RenderLight {
     fn positional(&self, position: Vec3, p: Vec3) -> Option<(Vec3, Vec3)> {
         let to_light = position - p;
         let distance_squared = to_light.length_squared();
-        if !(distance_squared > 0.0) {
+        if distance_squared.is_nan() || distance_squared <= 0.0 {
             return None;
         }
         let window = match self.range {

@@ -2,6 +2,7 @@
 //! and the integrators' per-point work. Nothing here knows which backend
 //! runs it or what time it is: a frame arrives as a [`FrameJob`].
 
+pub mod area;
 pub mod brdf;
 pub mod camera;
 pub mod frame;

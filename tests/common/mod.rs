@@ -181,3 +181,54 @@ pub fn render_with_stats(scene: SceneDesc, settings: &Settings) -> (Image, Frame
 pub fn pixel(image: &Image, x: u32, y: u32) -> Vec4 {
     image.pixels[(y * image.width + x) as usize]
 }
+
+/// The six faces of an axis-aligned cube of half-size `half` around
+/// `centre`, each counter-clockwise seen from outside (for [`add_quads`]).
+pub fn box_quads(centre: Vec3, half: f32) -> [[Vec3; 4]; 6] {
+    // (outward normal, t1, t2) with t1 × t2 = normal.
+    let faces = [
+        (Vec3::X, Vec3::Y, Vec3::Z),
+        (Vec3::NEG_X, Vec3::Z, Vec3::Y),
+        (Vec3::Y, Vec3::Z, Vec3::X),
+        (Vec3::NEG_Y, Vec3::X, Vec3::Z),
+        (Vec3::Z, Vec3::X, Vec3::Y),
+        (Vec3::NEG_Z, Vec3::Y, Vec3::X),
+    ];
+    faces.map(|(n, t1, t2)| {
+        let c = centre + n * half;
+        [
+            c + (-t1 - t2) * half,
+            c + (t1 - t2) * half,
+            c + (t1 + t2) * half,
+            c + (-t1 + t2) * half,
+        ]
+    })
+}
+
+/// A point light at `position` standing for a spherical lamp of `radius`
+/// metres (the light's `extras.radius`).
+pub fn add_lamp(scene: &mut SceneDesc, intensity: f32, position: Vec3, radius: f32) -> usize {
+    let node = add_light(
+        scene,
+        LightKind::Point,
+        intensity,
+        DMat4::from_translation(position.as_dvec3()),
+    );
+    if let Some(light) = scene.lights.last_mut() {
+        light.radius = Some(radius);
+    }
+    node
+}
+
+/// Root-mean-square difference of the colour channels of two images of the
+/// same size.
+pub fn rms_difference(a: &Image, b: &Image) -> f32 {
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    let sum: f64 = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(p, q)| (p.truncate() - q.truncate()).length_squared() as f64)
+        .sum();
+    (sum / (3 * a.pixels.len()) as f64).sqrt() as f32
+}

@@ -1,0 +1,69 @@
+//! The paper's cost model (section 3) made concrete: Whitted, LMM1 and LMM
+//! on the generated city block for nL = 1, 4, 16, 64 street lamps at 480p
+//! and 1080p, one cold frame each, with N_LM against N_pix.
+//!
+//! `cargo bench --bench lmm` prints a Markdown table (BENCHMARKS.md keeps
+//! it). `LMANIM_BENCH_QUICK=1` runs 480p only.
+
+use std::time::Instant;
+
+use lmanim::authoring::city::{city_block, CityParams};
+use lmanim::backend::CpuBackend;
+use lmanim::sequence::Sequence;
+use lmanim::settings::{Method, Settings};
+use lmanim::stats::FrameStats;
+
+fn main() {
+    let quick = std::env::var_os("LMANIM_BENCH_QUICK").is_some();
+    let sizes: &[(u32, u32)] = if quick {
+        &[(854, 480)]
+    } else {
+        &[(854, 480), (1920, 1080)]
+    };
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let backend = CpuBackend::new(None).expect("thread pool");
+    println!("threads: {}", backend.threads());
+    println!("| nL | size | method | seconds | vs Whitted | N_pix (points) | N_LM | bits computed | mean p2n tests | shadow rays |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    for lamps in [1u32, 4, 16, 64] {
+        let path = dir.path().join(format!("city{lamps}.glb"));
+        city_block(&CityParams {
+            lamps,
+            ..CityParams::default()
+        })
+        .and_then(|city| city.write_glb(&path))
+        .expect("city scene");
+        for &(width, height) in sizes {
+            let mut whitted_seconds = 0.0;
+            for method in [Method::Whitted, Method::Lmm1, Method::Lmm] {
+                let settings = Settings {
+                    width,
+                    height,
+                    method,
+                    ..Settings::default()
+                };
+                let mut sequence = Sequence::load(&path).expect("city loads");
+                let placed = sequence.place(&settings).expect("camera");
+                let mut stats = FrameStats::default();
+                let start = Instant::now();
+                sequence
+                    .render(&backend, &placed, &settings, &mut stats)
+                    .expect("frame renders");
+                let seconds = start.elapsed().as_secs_f64();
+                if method == Method::Whitted {
+                    whitted_seconds = seconds;
+                }
+                let mesh = stats.lightmesh.unwrap_or_default();
+                println!(
+                    "| {lamps} | {height}p | {method} | {seconds:.2} | {:.1}× | {} | {} | {} | {:.1} | {} |",
+                    whitted_seconds / seconds,
+                    stats.shading_points,
+                    mesh.nodes_computed,
+                    mesh.bits_computed,
+                    mesh.mean_p2n_tests,
+                    stats.rays.shadow
+                );
+            }
+        }
+    }
+}

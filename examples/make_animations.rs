@@ -1,0 +1,246 @@
+//! Writes the sample scenes under `animations/`:
+//! `cargo run --example make_animations`.
+//!
+//! `courtyard.gltf` shows what lmanim does in one still: a floor and walls
+//! to catch soft shadows, pillars and crates to cast them, a mirror sphere
+//! and a glass sphere for Whitted reflection and refraction, three coloured
+//! point lamps of different radii (so penumbrae of different widths) and a
+//! spot light. Its settings are in the hand-written `courtyard.ron`.
+
+use std::f32::consts::PI;
+use std::path::Path;
+
+use anyhow::Context;
+use glam::{Quat, Vec2, Vec3, Vec4};
+use lmanim::authoring::{look_at_rotation, shapes, GltfBuilder, MeshId, NodeDesc, Primitive};
+use lmanim::scene::{Camera, Light, LightKind, Material, Projection};
+
+fn main() -> anyhow::Result<()> {
+    let out = Path::new(env!("CARGO_MANIFEST_DIR")).join("animations");
+    let path = out.join("courtyard.gltf");
+    courtyard()?
+        .write_gltf(&path)
+        .with_context(|| format!("writing {}", path.display()))?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
+/// A dielectric (non-metal) material of one colour.
+fn matte(name: &str, colour: Vec3, roughness: f32) -> Material {
+    Material {
+        name: Some(name.into()),
+        base_color: colour.extend(1.0),
+        metallic: 0.0,
+        roughness,
+        ..Material::default()
+    }
+}
+
+fn point_lamp(name: &str, colour: Vec3, intensity: f32, radius: f32) -> Light {
+    Light {
+        name: Some(name.into()),
+        kind: LightKind::Point,
+        color: colour,
+        intensity,
+        range: None,
+        radius: Some(radius),
+    }
+}
+
+fn courtyard() -> anyhow::Result<GltfBuilder> {
+    let mut b = GltfBuilder::new();
+
+    let stone = b.add_material(&matte("Stone", Vec3::new(0.55, 0.52, 0.48), 0.8))?;
+    let plaster = b.add_material(&matte("Plaster", Vec3::new(0.75, 0.72, 0.66), 0.9))?;
+    let wood = b.add_material(&matte("Wood", Vec3::new(0.45, 0.28, 0.14), 0.6))?;
+    let paint = b.add_material(&matte("BluePaint", Vec3::new(0.12, 0.25, 0.6), 0.4))?;
+    let mirror = b.add_material(&Material {
+        name: Some("Mirror".into()),
+        base_color: Vec4::new(0.95, 0.95, 0.95, 1.0),
+        metallic: 1.0,
+        roughness: 0.05,
+        ..Material::default()
+    })?;
+    let glass = b.add_material(&Material {
+        name: Some("Glass".into()),
+        base_color: Vec4::ONE,
+        metallic: 0.0,
+        roughness: 0.0,
+        transmission: 1.0,
+        ior: 1.5,
+        ..Material::default()
+    })?;
+
+    // Shared geometry: a unit cube scaled per node, a unit sphere.
+    let cube = b.add_geometry(&shapes::cuboid(Vec3::splat(0.5)))?;
+    let sphere = b.add_geometry(&shapes::uv_sphere(1.0, 48, 24))?;
+    let floor_geometry = b.add_geometry(&shapes::plane(Vec2::new(6.0, 6.0)))?;
+    let mut mesh = |name: &str, geometry, material| {
+        b.add_mesh(
+            name,
+            &[Primitive {
+                geometry,
+                material: Some(material),
+            }],
+        )
+    };
+    let floor = mesh("Floor", floor_geometry, stone)?;
+    let wall = mesh("Wall", cube, plaster)?;
+    let pillar = mesh("Pillar", cube, stone)?;
+    let crate_mesh = mesh("Crate", cube, wood)?;
+    let block = mesh("Block", cube, paint)?;
+    let mirror_ball = mesh("MirrorBall", sphere, mirror)?;
+    let glass_ball = mesh("GlassBall", sphere, glass)?;
+
+    let mut placed = |name: &str, mesh: MeshId, at: Vec3, size: Vec3, turn: f32| {
+        b.add_node(NodeDesc {
+            translation: at,
+            rotation: Quat::from_rotation_y(turn),
+            scale: size,
+            mesh: Some(mesh),
+            ..NodeDesc::named(name)
+        })
+    };
+    placed("Floor", floor, Vec3::ZERO, Vec3::ONE, 0.0)?;
+    placed(
+        "BackWall",
+        wall,
+        Vec3::new(0.0, 1.5, -5.0),
+        Vec3::new(12.0, 3.0, 0.3),
+        0.0,
+    )?;
+    placed(
+        "SideWall",
+        wall,
+        Vec3::new(-5.5, 1.0, -1.5),
+        Vec3::new(0.3, 2.0, 7.0),
+        0.0,
+    )?;
+    placed(
+        "LowWall",
+        wall,
+        Vec3::new(5.5, 0.6, -1.5),
+        Vec3::new(0.3, 1.2, 7.0),
+        0.0,
+    )?;
+    for (i, (x, z)) in [(-3.0, -2.5), (3.0, -2.5), (-3.0, 1.5), (3.0, 1.5)]
+        .into_iter()
+        .enumerate()
+    {
+        let at = Vec3::new(x, 1.5, z);
+        placed(
+            &format!("Pillar.{i}"),
+            pillar,
+            at,
+            Vec3::new(0.35, 3.0, 0.35),
+            0.0,
+        )?;
+    }
+    placed(
+        "Crate.0",
+        crate_mesh,
+        Vec3::new(-1.6, 0.4, 0.2),
+        Vec3::splat(0.8),
+        0.35,
+    )?;
+    placed(
+        "Crate.1",
+        crate_mesh,
+        Vec3::new(-1.5, 1.05, 0.1),
+        Vec3::splat(0.5),
+        PI / 4.0,
+    )?;
+    placed(
+        "Block",
+        block,
+        Vec3::new(2.2, 0.6, -1.8),
+        Vec3::new(0.6, 1.2, 0.6),
+        -0.3,
+    )?;
+    placed(
+        "MirrorBall",
+        mirror_ball,
+        Vec3::new(0.1, 0.7, -1.6),
+        Vec3::splat(0.7),
+        0.0,
+    )?;
+    placed(
+        "GlassBall",
+        glass_ball,
+        Vec3::new(1.2, 0.45, 0.9),
+        Vec3::splat(0.45),
+        0.0,
+    )?;
+
+    // Three lamps of different colours and sizes: wide and narrow
+    // penumbrae side by side. Intensities in W/sr (see DESIGN.md).
+    let lamps = [
+        (
+            "Lamp.Warm",
+            Vec3::new(1.0, 0.72, 0.45),
+            30.0,
+            0.3,
+            Vec3::new(-2.4, 2.6, 1.2),
+        ),
+        (
+            "Lamp.Cool",
+            Vec3::new(0.5, 0.7, 1.0),
+            20.0,
+            0.15,
+            Vec3::new(2.6, 2.3, -0.6),
+        ),
+        (
+            "Lamp.Small",
+            Vec3::new(1.0, 0.95, 0.85),
+            6.0,
+            0.05,
+            Vec3::new(0.3, 1.3, 2.2),
+        ),
+    ];
+    for (name, colour, intensity, radius, at) in lamps {
+        let light = b.add_light(&point_lamp(name, colour, intensity, radius))?;
+        b.add_node(NodeDesc {
+            translation: at,
+            light: Some(light),
+            ..NodeDesc::named(name)
+        })?;
+    }
+    let spot_at = Vec3::new(1.5, 5.0, 3.5);
+    let spot = b.add_light(&Light {
+        name: Some("Spot.Key".into()),
+        kind: LightKind::Spot {
+            inner_cone: 0.25,
+            outer_cone: 0.4,
+        },
+        color: Vec3::new(1.0, 0.98, 0.92),
+        intensity: 150.0,
+        range: None,
+        radius: Some(0.1),
+    })?;
+    b.add_node(NodeDesc {
+        translation: spot_at,
+        rotation: look_at_rotation(spot_at, Vec3::new(0.0, 0.0, -1.0), Vec3::Y)
+            .context("spot light aim")?,
+        light: Some(spot),
+        ..NodeDesc::named("Spot.Key")
+    })?;
+
+    let camera = b.add_camera(&Camera {
+        name: Some("main".into()),
+        projection: Projection::Perspective {
+            yfov: 50f32.to_radians(),
+            aspect_ratio: Some(16.0 / 9.0),
+            znear: 0.1,
+            zfar: Some(100.0),
+        },
+    })?;
+    let eye = Vec3::new(0.8, 2.4, 7.8);
+    b.add_node(NodeDesc {
+        translation: eye,
+        rotation: look_at_rotation(eye, Vec3::new(0.0, 0.8, -1.0), Vec3::Y)
+            .context("camera aim")?,
+        camera: Some(camera),
+        ..NodeDesc::named("main")
+    })?;
+    Ok(b)
+}

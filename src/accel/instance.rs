@@ -1,0 +1,140 @@
+//! One dynamic object of the [`World`](super::World): its own BVH in object
+//! space, placed in render space by an affine map that may change every
+//! frame. Rays are taken into object space rather than the triangles into
+//! render space, so a rigid move costs nothing here; only the world's small
+//! top level over instance bounds is rebuilt.
+
+use glam::{Affine3A, Mat3, Vec3};
+
+use super::bounds::Bounds;
+use super::mesh_bvh::{BuildTriangle, Layout, MeshBvh, MeshHit, TriangleRef};
+use super::Ray;
+use super::BUILD_PARAMS;
+
+pub struct Instance {
+    object: u32,
+    bvh: MeshBvh,
+    /// The object's triangles as given (valid indices only), for rebuilds.
+    triangles: Vec<[u32; 3]>,
+    positions: Vec<Vec3>,
+    to_render: Affine3A,
+    /// Inverse of `to_render`; `None` while that is singular, and then the
+    /// instance is hit by nothing.
+    to_object: Option<Affine3A>,
+    /// Maps an object-space `(b - a) × (c - a)` to the direction of the
+    /// render-space cross product of the transformed edges: the cofactor matrix
+    /// `det(M) M^-T`, which keeps orientation under mirroring transforms.
+    normal_to_render: Mat3,
+    object_bounds: Bounds,
+}
+
+impl Instance {
+    pub fn new(
+        object: u32,
+        positions: &[Vec3],
+        triangles: Vec<[u32; 3]>,
+        to_render: Affine3A,
+    ) -> Instance {
+        let bvh = build(object, &triangles, positions);
+        let mut instance = Instance {
+            object,
+            object_bounds: bounds_of(&bvh),
+            bvh,
+            triangles,
+            positions: positions.to_vec(),
+            to_render,
+            to_object: None,
+            normal_to_render: Mat3::ZERO,
+        };
+        instance.set_transform(to_render);
+        instance
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.bvh.len()
+    }
+
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    pub fn render_bounds(&self) -> Bounds {
+        self.object_bounds.transformed(&self.to_render)
+    }
+
+    pub fn set_transform(&mut self, to_render: Affine3A) {
+        let m = Mat3::from(to_render.matrix3);
+        let det = m.determinant();
+        self.to_render = to_render;
+        self.to_object = (det != 0.0 && to_render.is_finite()).then(|| to_render.inverse());
+        self.normal_to_render = m.inverse().transpose() * det;
+    }
+
+    /// New object-space positions (same count): refits when every kept
+    /// triangle still has area and no dropped one gained some, else rebuilds.
+    pub fn set_positions(&mut self, positions: &[Vec3]) {
+        self.positions.copy_from_slice(positions);
+        let p = &self.positions;
+        let vertices = |tri: [u32; 3]| tri.map(|i| p[i as usize]);
+        let kept_all = self.bvh.len() == self.triangles.len();
+        let refitted = kept_all
+            && self
+                .bvh
+                .refit(|s: TriangleRef| vertices(self.triangles[s.triangle as usize]));
+        if !refitted {
+            self.bvh = build(self.object, &self.triangles, &self.positions);
+        }
+        self.object_bounds = bounds_of(&self.bvh);
+    }
+
+    fn object_ray(&self, ray: &Ray) -> Option<Ray> {
+        let m = self.to_object?;
+        // The direction is mapped, not normalised, so `t` means the same
+        // point in both spaces and hits compare with render-space ones.
+        Some(Ray::new(
+            m.transform_point3(ray.origin),
+            m.transform_vector3(ray.direction),
+            ray.t_max,
+        ))
+    }
+
+    /// Lowers `best` to this instance's closest hit; the hit's `normal` is
+    /// mapped into render space.
+    pub fn closest_hit(&self, ray: &Ray, best: &mut Option<MeshHit>) {
+        let Some(local) = self.object_ray(ray) else {
+            return;
+        };
+        let before = *best;
+        self.bvh.closest_hit(&local, best);
+        if *best != before {
+            if let Some(hit) = best.as_mut() {
+                hit.normal = (self.normal_to_render * hit.normal).normalize();
+            }
+        }
+    }
+
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.object_ray(ray)
+            .is_some_and(|local| self.bvh.occluded(&local))
+    }
+}
+
+/// A refittable BVH over the object's triangles in object space.
+fn build(object: u32, triangles: &[[u32; 3]], positions: &[Vec3]) -> MeshBvh {
+    let build: Vec<BuildTriangle> = triangles
+        .iter()
+        .enumerate()
+        .map(|(i, tri)| BuildTriangle {
+            vertices: tri.map(|v| positions[v as usize]),
+            source: TriangleRef {
+                object,
+                triangle: i as u32,
+            },
+        })
+        .collect();
+    MeshBvh::build(&build, Layout::Binary, BUILD_PARAMS)
+}
+
+fn bounds_of(bvh: &MeshBvh) -> Bounds {
+    Bounds::from_points(bvh.triangles().flat_map(|(v, _)| v))
+}

@@ -1,0 +1,245 @@
+//! One BVH over one list of triangles: the merged static geometry of the
+//! [`World`](super::World) in render space, or one dynamic object in its own
+//! object space. Built with obvhs' PLOC builder; triangles are stored in the
+//! BVH's primitive order, so a leaf's primitive slot is the storage index
+//! (no `primitive_indices` lookup per test). Closest hits are ordered by
+//! `(t, object, triangle)`, so ties at exactly equal `t` (a ray through a
+//! shared edge) resolve the same way whatever the tree's shape, the layout,
+//! or the thread count.
+
+use std::time::Duration;
+
+use glam::{Vec2, Vec3};
+use obvhs::{
+    aabb::Aabb, bvh2::builder::build_bvh2, bvh2::Bvh2, cwbvh::builder::build_cwbvh, cwbvh::CwBvh,
+    BvhBuildParams,
+};
+
+use super::node_test::TraversalRay;
+use super::traverse::{traverse_binary, traverse_wide};
+use super::triangle::WatertightRay;
+use super::Ray;
+
+/// Where a stored triangle came from: the object's index in the slice the
+/// world was built from, and the triangle's index in that object.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct TriangleRef {
+    pub object: u32,
+    pub triangle: u32,
+}
+
+/// A triangle to build from, already in the BVH's space.
+#[derive(Clone, Copy, Debug)]
+pub struct BuildTriangle {
+    pub vertices: [Vec3; 3],
+    pub source: TriangleRef,
+}
+
+/// Which obvhs tree to build. `Wide` (CWBVH, eight children per node,
+/// quantised boxes) traverses faster; `Binary` (BVH2) can be refitted after
+/// the triangles move.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layout {
+    Wide,
+    Binary,
+}
+
+enum Tree {
+    Wide(CwBvh),
+    Binary(Bvh2),
+}
+
+/// The best hit found so far, in the space of the ray that found it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeshHit {
+    pub t: f32,
+    pub source: TriangleRef,
+    pub barycentric: Vec2,
+    /// Unit `(b - a) × (c - a)` in the BVH's space.
+    pub normal: Vec3,
+}
+
+impl MeshHit {
+    /// The order closest hits are chosen by; see the module docs.
+    fn precedes(&self, other: &Option<MeshHit>) -> bool {
+        other.is_none_or(|o| (self.t, self.source) < (o.t, o.source))
+    }
+}
+
+pub struct MeshBvh {
+    tree: Tree,
+    /// Vertices in primitive-slot order.
+    vertices: Vec<[[f32; 3]; 3]>,
+    sources: Vec<TriangleRef>,
+}
+
+impl MeshBvh {
+    /// Builds over the triangles, dropping zero-area ones (their f64 cross
+    /// product is exactly zero) and ones with non-finite vertices.
+    ///
+    /// obvhs' builder is parallel and parts of it (an unstable parallel radix
+    /// sort of equal costs) may order ties differently from run to run, so
+    /// the build runs on one thread: the same triangles give the same tree.
+    pub fn build(triangles: &[BuildTriangle], layout: Layout, params: BvhBuildParams) -> MeshBvh {
+        let kept: Vec<&BuildTriangle> =
+            triangles.iter().filter(|t| has_area(&t.vertices)).collect();
+        let aabbs: Vec<Aabb> = kept
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.vertices.map(Into::into);
+                Aabb::new(a, a)
+                    .union(&Aabb::new(b, b))
+                    .union(&Aabb::new(c, c))
+            })
+            .collect();
+        let tree = if aabbs.is_empty() {
+            match layout {
+                Layout::Wide => Tree::Wide(CwBvh::default()),
+                Layout::Binary => Tree::Binary(Bvh2::default()),
+            }
+        } else {
+            single_threaded(|| match layout {
+                Layout::Wide => Tree::Wide(build_cwbvh(&aabbs, params, &mut Duration::default())),
+                Layout::Binary => {
+                    Tree::Binary(build_bvh2(&aabbs, params, &mut Duration::default()))
+                }
+            })
+        };
+        let order = match &tree {
+            Tree::Wide(t) => &t.primitive_indices,
+            Tree::Binary(t) => &t.primitive_indices,
+        };
+        let vertices = order
+            .iter()
+            .map(|&i| kept[i as usize].vertices.map(|v| v.to_array()))
+            .collect();
+        let sources = order.iter().map(|&i| kept[i as usize].source).collect();
+        MeshBvh {
+            tree,
+            vertices,
+            sources,
+        }
+    }
+
+    /// Triangles stored (zero-area ones were dropped).
+    pub fn len(&self) -> usize {
+        self.vertices.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.vertices.is_empty()
+    }
+
+    /// Triangles stored, with their sources, in storage order.
+    pub fn triangles(&self) -> impl Iterator<Item = ([Vec3; 3], TriangleRef)> + '_ {
+        self.vertices
+            .iter()
+            .zip(&self.sources)
+            .map(|(v, s)| (v.map(Vec3::from_array), *s))
+    }
+
+    /// Lowers `best` to the closest hit of `ray` on this mesh, if any is
+    /// closer (ties by [`TriangleRef`]). `ray` is in this BVH's space;
+    /// `best.t` must be comparable, i.e. measured along the same parameter.
+    pub fn closest_hit(&self, ray: &Ray, best: &mut Option<MeshHit>) {
+        let exact = WatertightRay::new(ray.origin, ray.direction, ray.t_max);
+        let traversal = TraversalRay::new(ray.origin, ray.direction);
+        let t_cull = best.map_or(ray.t_max, |b| b.t);
+        self.walk(&traversal, t_cull, |slot, t_cull| {
+            let [a, b, c] = &self.vertices[slot];
+            if let Some(hit) = exact.intersect(a, b, c) {
+                let candidate = MeshHit {
+                    t: hit.t,
+                    source: self.sources[slot],
+                    barycentric: hit.barycentric,
+                    normal: normal(&self.vertices[slot]),
+                };
+                if candidate.precedes(best) {
+                    *best = Some(candidate);
+                    *t_cull = hit.t;
+                }
+            }
+            true
+        });
+    }
+
+    /// Whether anything lies on the ray in `(0, t_max)`; stops at the first
+    /// hit found.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        let exact = WatertightRay::new(ray.origin, ray.direction, ray.t_max);
+        let traversal = TraversalRay::new(ray.origin, ray.direction);
+        let mut hit = false;
+        self.walk(&traversal, ray.t_max, |slot, _| {
+            let [a, b, c] = &self.vertices[slot];
+            hit = exact.intersect(a, b, c).is_some();
+            !hit
+        });
+        hit
+    }
+
+    fn walk(&self, ray: &TraversalRay, t_cull: f32, visit: impl FnMut(usize, &mut f32) -> bool) {
+        match &self.tree {
+            Tree::Wide(t) => traverse_wide(t, ray, t_cull, visit),
+            Tree::Binary(t) => traverse_binary(t, ray, t_cull, visit),
+        }
+    }
+
+    /// Moves the stored triangles to `vertices_of(source)` and refits the
+    /// boxes, keeping the tree's topology. Only a `Binary` tree refits;
+    /// returns `false` (and changes nothing) for a `Wide` one or when a
+    /// triangle would lose its area, in which case rebuild instead.
+    pub fn refit(&mut self, vertices_of: impl Fn(TriangleRef) -> [Vec3; 3]) -> bool {
+        let Tree::Binary(tree) = &mut self.tree else {
+            return false;
+        };
+        let moved: Vec<[Vec3; 3]> = self.sources.iter().map(|&s| vertices_of(s)).collect();
+        if !moved.iter().all(has_area) {
+            return false;
+        }
+        for (stored, new) in self.vertices.iter_mut().zip(&moved) {
+            *stored = new.map(|v| v.to_array());
+        }
+        for node in tree.nodes.iter_mut().filter(|n| n.is_leaf()) {
+            let first = node.first_index as usize;
+            let aabb = moved[first..first + node.prim_count as usize]
+                .iter()
+                .flatten()
+                .fold(Aabb::empty(), |mut b, &v| {
+                    b.extend(v.into());
+                    b
+                });
+            node.set_aabb(aabb);
+        }
+        tree.refit_all();
+        true
+    }
+}
+
+/// Zero-area triangles must never be hit; the watertight test rejects a zero
+/// determinant but rounding may make a collinear triangle's determinant
+/// non-zero, so they are dropped here instead. Differences of f32 and their
+/// products are exact in f64, so this is a collinearity test up to one
+/// rounding.
+fn has_area(v: &[Vec3; 3]) -> bool {
+    let [a, b, c] = v.map(|p| p.as_dvec3());
+    v.iter().all(|p| p.is_finite()) && (b - a).cross(c - a) != glam::DVec3::ZERO
+}
+
+/// Unit geometric normal, computed in f64 so that tiny triangles (whose f32
+/// cross product may underflow) still get one.
+fn normal(v: &[[f32; 3]; 3]) -> Vec3 {
+    let [a, b, c] = v.map(|p| Vec3::from_array(p).as_dvec3());
+    (b - a).cross(c - a).normalize().as_vec3()
+}
+
+fn single_threaded<R: Send>(build: impl FnOnce() -> R + Send) -> R {
+    match rayon::ThreadPoolBuilder::new().num_threads(1).build() {
+        Ok(pool) => pool.install(build),
+        // Without a pool of our own, build on the caller's: hits stay the
+        // same (ties are ordered by id), only the tree may differ.
+        Err(e) => {
+            log::warn!("no single-thread pool for the BVH build ({e}); building on the caller's");
+            build()
+        }
+    }
+}

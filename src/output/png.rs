@@ -1,0 +1,113 @@
+//! PNG previews: a quick look at a frame, not a deliverable. Linear radiance
+//! is tone-mapped with Reinhard's operator on luminance, `L' = L / (1 + L)`
+//! at exposure 1 (hue is kept, highlights roll off instead of clipping),
+//! then sRGB-encoded into 8-bit RGBA. Alpha is stored as is, clamped to
+//! [0, 1].
+
+use std::path::Path;
+
+use glam::{Vec3, Vec4};
+use image::ImageEncoder;
+
+use super::{write_atomically, Image, OutputError};
+
+/// Rec.709 luminance weights, matching the linear Rec.709 colour of frames.
+const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
+
+/// Writes a tone-mapped 8-bit sRGB preview of `image` to `path`, atomically.
+pub fn write_png_preview(path: &Path, image: &Image) -> Result<(), OutputError> {
+    if !image.has_consistent_size() {
+        return Err(OutputError::image_size(path, image));
+    }
+    let bytes: Vec<u8> = image.pixels.iter().flat_map(|&p| tone_map(p)).collect();
+    write_atomically(path, |writer| {
+        image::codecs::png::PngEncoder::new(writer)
+            .write_image(
+                &bytes,
+                image.width,
+                image.height,
+                image::ExtendedColorType::Rgba8,
+            )
+            .map_err(|error| OutputError::Encode {
+                path: path.to_path_buf(),
+                fault: error.to_string(),
+            })
+    })
+}
+
+/// One linear RGBA pixel to display-ready 8-bit sRGB RGBA. Negative and NaN
+/// values become black rather than poisoning the preview.
+pub fn tone_map(pixel: Vec4) -> [u8; 4] {
+    let rgb = pixel.truncate().max(Vec3::ZERO);
+    let luminance = rgb.dot(LUMINANCE);
+    let mapped = if luminance > 0.0 {
+        rgb / (1.0 + luminance)
+    } else {
+        Vec3::ZERO
+    };
+    let [r, g, b] = mapped.to_array().map(|c| quantise(srgb_encode(c)));
+    [r, g, b, quantise(pixel.w)]
+}
+
+/// The sRGB transfer function (IEC 61966-2-1) for a linear value in [0, 1].
+fn srgb_encode(linear: f32) -> f32 {
+    let linear = linear.clamp(0.0, 1.0);
+    if linear <= 0.003_130_8 {
+        linear * 12.92
+    } else {
+        1.055 * linear.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// [0, 1] to 0..=255 with rounding; NaN becomes 0 (`as` saturates).
+fn quantise(value: f32) -> u8 {
+    (value.clamp(0.0, 1.0) * 255.0).round() as u8
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tone_curve_keeps_black_and_white_points_sane() {
+        assert_eq!(tone_map(Vec4::new(0.0, 0.0, 0.0, 1.0)), [0, 0, 0, 255]);
+        // Luminance 1 maps to 0.5 linear, sRGB 0.735 → 188.
+        assert_eq!(tone_map(Vec4::ONE), [188, 188, 188, 255]);
+        // Very bright white approaches but never passes 255.
+        assert_eq!(tone_map(Vec4::splat(1e6)), [255, 255, 255, 255]);
+        assert_eq!(
+            tone_map(Vec4::new(f32::NAN, -1.0, 0.0, f32::NAN)),
+            [0, 0, 0, 0]
+        );
+    }
+
+    #[test]
+    fn tone_curve_is_monotonic() {
+        let mut last = 0;
+        for i in 0..1000 {
+            let v = i as f32 * 0.05;
+            let [r, ..] = tone_map(Vec4::new(v, v, v, 1.0));
+            assert!(r >= last);
+            last = r;
+        }
+    }
+
+    #[test]
+    fn preview_decodes_with_the_right_size() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("previews/frame.0001.png");
+        let image = Image {
+            width: 5,
+            height: 3,
+            pixels: (0..15)
+                .map(|i| Vec4::new(i as f32, 0.5, 0.0, 1.0))
+                .collect(),
+        };
+        write_png_preview(&path, &image).unwrap();
+        let decoded = image::open(&path).unwrap().to_rgba8();
+        assert_eq!(decoded.dimensions(), (5, 3));
+        // Top row first: pixel (1, 0) is the second value written.
+        assert_eq!(decoded.get_pixel(1, 0).0, tone_map(image.pixels[1]));
+        assert_eq!(decoded.get_pixel(4, 2).0, tone_map(image.pixels[14]));
+    }
+}

@@ -1,0 +1,232 @@
+//! Render settings: how big, how fast, which method, where to. They come
+//! from a RON file (`scene.ron` beside the scene, see `animations/`), CLI
+//! flags override single fields, and [`Settings::validate`] rejects
+//! impossible values before any work starts. Every field has a default, so
+//! a settings file only names what it changes.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::output::ExrPrecision;
+
+/// The largest width or height accepted: beyond it a frame buffer no
+/// longer fits a sensible amount of memory (and EXR viewers choke).
+pub const MAX_DIMENSION: u32 = 32768;
+
+/// The deepest Whitted recursion accepted; deeper only costs time.
+pub const MAX_DEPTH: u32 = 64;
+
+/// Everything that decides how frames are rendered and written.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Settings {
+    /// Output width in pixels.
+    pub width: u32,
+    /// Output height in pixels.
+    pub height: u32,
+    /// Frames per second of the timeline.
+    pub fps: f64,
+    pub method: Method,
+    /// Samples per pixel (camera rays, jittered within the pixel).
+    pub spp: u32,
+    /// Whitted recursion depth for mirrors and refraction.
+    pub max_depth: u32,
+    /// Camera node or camera name; None takes the first camera.
+    pub camera: Option<String>,
+    pub exr_precision: ExrPrecision,
+    /// Also write a tone-mapped PNG preview of every frame.
+    pub png: bool,
+    /// Worker threads; None uses every core.
+    pub threads: Option<usize>,
+    /// Output frame pattern (`frame.####.exr`); None derives one from the
+    /// scene's name.
+    pub out: Option<String>,
+    pub lamps: LampSettings,
+    pub lightmesh: LightMeshSettings,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            width: 640,
+            height: 360,
+            fps: 24.0,
+            method: Method::Whitted,
+            spp: 1,
+            max_depth: 5,
+            camera: None,
+            exr_precision: ExrPrecision::Half,
+            png: false,
+            threads: None,
+            out: None,
+            lamps: LampSettings::default(),
+            lightmesh: LightMeshSettings::default(),
+        }
+    }
+}
+
+/// How shadows (and so the whole frame) are computed.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Hard shadows with one shadow ray per light: the reference.
+    #[default]
+    Whitted,
+    /// Light Meshes Method with point-to-node visibility tests.
+    Lmm,
+    /// LMM1: the Light Meshes Method without point-to-node tests.
+    Lmm1,
+    /// Monte Carlo sampling of spherical lamps: the soft-shadow reference.
+    Area,
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Method::Whitted => "whitted",
+            Method::Lmm => "lmm",
+            Method::Lmm1 => "lmm1",
+            Method::Area => "area",
+        })
+    }
+}
+
+/// Lamp radii, which set the size of soft shadows. A light's own
+/// `extras.radius` in the scene wins over `default_radius`; an entry in
+/// `radius` (keyed by light name) wins over both.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LampSettings {
+    /// Radius in metres for lights that state none.
+    pub default_radius: Option<f32>,
+    /// Radius in metres per light name.
+    pub radius: BTreeMap<String, f32>,
+}
+
+/// Light-mesh lattice parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LightMeshSettings {
+    /// Lattice spacing in metres; None derives it from the lamp radii.
+    pub h: Option<f32>,
+    /// Interpolation radius in units of `h` (the paper's kI).
+    pub ki: f32,
+    /// Memory the node masks may take, in MiB; a frame that would need
+    /// more is refused with a clear error instead of exhausting memory.
+    pub max_memory_mib: usize,
+}
+
+impl Default for LightMeshSettings {
+    fn default() -> Self {
+        LightMeshSettings {
+            h: None,
+            ki: 2.5,
+            max_memory_mib: 4096,
+        }
+    }
+}
+
+/// Why a settings file could not be used.
+#[derive(Debug, thiserror::Error)]
+pub enum SettingsError {
+    #[error("{path}: cannot read: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}:{line}:{column}: {fault}")]
+    Parse {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        fault: String,
+    },
+    #[error("{origin}: {fault}")]
+    Invalid { origin: String, fault: String },
+}
+
+impl Settings {
+    /// Reads and validates a RON settings file.
+    pub fn load(path: &Path) -> Result<Settings, SettingsError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SettingsError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let settings = Settings::parse(&text, path)?;
+        settings.check().map_err(|fault| SettingsError::Invalid {
+            origin: path.display().to_string(),
+            fault,
+        })?;
+        Ok(settings)
+    }
+
+    /// Parses RON text; `path` only names the source in errors.
+    pub fn parse(text: &str, path: &Path) -> Result<Settings, SettingsError> {
+        ron::from_str(text).map_err(|error| SettingsError::Parse {
+            path: path.to_path_buf(),
+            line: error.position.line,
+            column: error.position.col,
+            fault: error.code.to_string(),
+        })
+    }
+
+    /// Rejects values no render can use, e.g. after CLI flags overrode a
+    /// loaded file. The message names the field and its value.
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        self.check().map_err(|fault| SettingsError::Invalid {
+            origin: "settings".into(),
+            fault,
+        })
+    }
+
+    fn check(&self) -> Result<(), String> {
+        for (name, value) in [("width", self.width), ("height", self.height)] {
+            if value == 0 || value > MAX_DIMENSION {
+                return Err(format!(
+                    "{name} is {value}; it must be 1 to {MAX_DIMENSION}"
+                ));
+            }
+        }
+        if self.spp == 0 {
+            return Err("spp is 0; it must be at least 1".into());
+        }
+        if !self.fps.is_finite() || self.fps <= 0.0 {
+            return Err(format!("fps is {}; it must be a positive number", self.fps));
+        }
+        if self.max_depth > MAX_DEPTH {
+            return Err(format!(
+                "max_depth is {}; it must be at most {MAX_DEPTH}",
+                self.max_depth
+            ));
+        }
+        if self.threads == Some(0) {
+            return Err("threads is 0; leave it out to use every core".into());
+        }
+        let lightmesh = &self.lightmesh;
+        if !lightmesh.ki.is_finite() || lightmesh.ki <= 0.0 {
+            return Err(format!(
+                "lightmesh.ki is {}; it must be positive",
+                lightmesh.ki
+            ));
+        }
+        if let Some(h) = lightmesh.h.filter(|h| !h.is_finite() || *h <= 0.0) {
+            return Err(format!("lightmesh.h is {h}; it must be positive"));
+        }
+        let bad_radius = |r: f32| !r.is_finite() || r < 0.0;
+        if let Some(r) = self.lamps.default_radius.filter(|&r| bad_radius(r)) {
+            return Err(format!(
+                "lamps.default_radius is {r}; it must be 0 or more metres"
+            ));
+        }
+        if let Some((name, r)) = self.lamps.radius.iter().find(|(_, &r)| bad_radius(r)) {
+            return Err(format!(
+                "lamps.radius of light `{name}` is {r}; it must be 0 or more metres"
+            ));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,412 @@
+//! The Light Meshes Method against its contract (paper sections 2–3): equal
+//! to Whitted away from shadow edges, the paper's count of step-3 tests, the
+//! inward penumbra, LMM against LMM1 at a concave corner, and the hard cases.
+
+mod common;
+
+use common::*;
+use glam::{DMat4, DQuat, DVec3, Vec3};
+use lmanim::lightmesh::LightMeshStats;
+use lmanim::output::Image;
+use lmanim::scene::{LightKind, SceneDesc};
+use lmanim::settings::{Method, Settings};
+
+fn with_method(mut settings: Settings, method: Method, h: f32, ki: f32) -> Settings {
+    settings.method = method;
+    settings.lightmesh.h = Some(h);
+    settings.lightmesh.ki = ki;
+    settings
+}
+
+fn lightmesh_stats(scene: SceneDesc, settings: &Settings) -> (Image, LightMeshStats) {
+    let (image, stats) = render_with_stats(scene, settings);
+    (
+        image,
+        stats
+            .lightmesh
+            .expect("light-mesh methods report their stats"),
+    )
+}
+
+fn lit_floor() -> SceneDesc {
+    let mut scene = empty_scene();
+    let m = add_material(&mut scene, lambert(Vec3::splat(0.6)));
+    add_quads(&mut scene, &[floor_quad(0.0, 5.0)], 4, m);
+    add_light(
+        &mut scene,
+        LightKind::Point,
+        20.0,
+        DMat4::from_translation(DVec3::new(0.3, 2.0, -0.2)),
+    );
+    add_light(
+        &mut scene,
+        LightKind::Point,
+        5.0,
+        DMat4::from_translation(DVec3::new(-1.0, 1.0, 0.7)),
+    );
+    add_top_camera(&mut scene, 5.0, 2.0);
+    scene
+}
+
+#[test]
+fn without_occluders_all_three_methods_agree() {
+    let base = settings(48, 32);
+    let whitted = render(lit_floor(), &base);
+    for method in [Method::Lmm, Method::Lmm1] {
+        let image = render(lit_floor(), &with_method(base.clone(), method, 0.1, 2.5));
+        for (a, b) in whitted.pixels.iter().zip(&image.pixels) {
+            assert!(
+                (*a - *b).abs().max_element() <= 1e-6 * a.max_element(),
+                "{method}: {a} vs {b}"
+            );
+        }
+    }
+}
+
+/// A plane tilted `tilt_degrees` about X (or lying flat), seen from above.
+fn open_plane(tilt_degrees: f64) -> SceneDesc {
+    let mut scene = empty_scene();
+    let m = add_material(&mut scene, lambert(Vec3::splat(0.5)));
+    let plane = add_quads(&mut scene, &[floor_quad(0.0, 6.0)], 1, m);
+    scene.nodes[plane].local = DMat4::from_quat(DQuat::from_rotation_x(tilt_degrees.to_radians()));
+    add_light(
+        &mut scene,
+        LightKind::Point,
+        50.0,
+        DMat4::from_translation(DVec3::new(0.0, 4.0, 0.0)),
+    );
+    add_top_camera(&mut scene, 5.0, 2.0);
+    scene
+}
+
+/// The paper's table of mean step-3 tests per point: on an open plane in
+/// general position the half-ball holds (2/3)·π·kI³ nodes on average.
+#[test]
+fn mean_point_to_node_tests_match_the_half_ball_volume() {
+    for (ki, expected) in [(2.1f32, 19.4f64), (2.5, 32.7), (3.0, 56.5)] {
+        let settings = with_method(settings(96, 96), Method::Lmm, 0.05, ki);
+        let (_, stats) = lightmesh_stats(open_plane(3.0), &settings);
+        let volume = 2.0 / 3.0 * std::f64::consts::PI * (ki as f64).powi(3);
+        assert!((volume - expected).abs() < 0.05);
+        let error = (stats.mean_p2n_tests - volume).abs() / volume;
+        assert!(
+            error < 0.03,
+            "kI {ki}: {} tests vs {volume:.1}",
+            stats.mean_p2n_tests
+        );
+        assert_eq!(stats.mean_p2n_tests, stats.mean_candidates);
+        // Nothing occludes the open plane: every candidate passes step 3.
+        assert_eq!(stats.mean_interp_set, stats.mean_candidates);
+    }
+}
+
+/// A plane lying exactly on a lattice plane loses the nodes in the plane:
+/// they fail step 2 ((n, x − P) = 0), so the mean falls below the volume.
+#[test]
+fn a_plane_on_a_lattice_plane_has_fewer_candidates() {
+    let h = 0.05f32;
+    let settings = with_method(settings(64, 64), Method::Lmm1, h, 2.5);
+    let (_, general) = lightmesh_stats(open_plane(0.0), &settings);
+    // Render space is world space minus the centre of the scene's bounds.
+    // A small marker quad far from the view at height Y puts that centre at
+    // Y/2, so the floor sits at −Y/2 in render space; choose Y to land it on
+    // the lattice plane one step below the origin's: y = (g − 1)·h.
+    let g = lmanim::lightmesh::lattice::GENERAL_POSITION.y;
+    let marker_height = 2.0 * (1.0 - g) * h;
+    let mut on_lattice = open_plane(0.0);
+    let m = add_material(&mut on_lattice, lambert(Vec3::splat(0.5)));
+    let corner = Vec3::new(5.9, marker_height, 5.9);
+    add_quads(
+        &mut on_lattice,
+        &[[
+            corner,
+            corner + Vec3::X * 0.01,
+            corner + Vec3::new(0.01, 0.0, -0.01),
+            corner - Vec3::Z * 0.01,
+        ]],
+        1,
+        m,
+    );
+    let (_, on_plane) = lightmesh_stats(on_lattice, &settings);
+    let volume = 2.0 / 3.0 * std::f64::consts::PI * 2.5f64.powi(3);
+    assert!((general.mean_candidates - volume).abs() / volume < 0.03);
+    // On the lattice plane, P's candidates are the nodes of whole layers
+    // j·h above it (j ≥ 1), discs of radius √(kI² − j²): on average
+    // π·Σ_j (kI² − j²) = 23.6 for kI = 2.5, against the half-ball's 32.7 —
+    // the in-plane disc (π·kI² / 2 of the volume's share) is lost to step 2.
+    let layers: f64 = (1..=2)
+        .map(|j| std::f64::consts::PI * (2.5f64.powi(2) - (j * j) as f64))
+        .sum();
+    let error = (on_plane.mean_candidates - layers).abs() / layers;
+    assert!(error < 0.03, "{} vs {layers:.1}", on_plane.mean_candidates);
+    assert!(on_plane.mean_candidates < general.mean_candidates - 5.0);
+}
+
+/// A leaf under a street lamp: an occluder smaller than the penumbra. Its
+/// Whitted umbra is black; LMM spreads the transition inward too, so the
+/// darkest point is clearly lighter — and a smaller h·kI brings it back.
+#[test]
+fn small_occluders_get_an_inward_penumbra() {
+    let leaf_scene = || {
+        let mut scene = empty_scene();
+        let m = add_material(&mut scene, lambert(Vec3::splat(0.5)));
+        add_quads(
+            &mut scene,
+            &[floor_quad(0.0, 4.0), floor_quad(1.0, 0.06)],
+            1,
+            m,
+        );
+        add_light(
+            &mut scene,
+            LightKind::Point,
+            20.0,
+            DMat4::from_translation(DVec3::new(0.0, 3.0, 0.0)),
+        );
+        add_top_camera(&mut scene, 0.9, 0.5);
+        scene
+    };
+    let darkest = |image: &Image| {
+        image
+            .pixels
+            .iter()
+            .map(|p| p.x)
+            .fold(f32::INFINITY, f32::min)
+    };
+    let brightest = |image: &Image| image.pixels.iter().map(|p| p.x).fold(0.0, f32::max);
+    let base = settings(64, 64);
+    let whitted = render(leaf_scene(), &base);
+    assert_eq!(darkest(&whitted), 0.0, "Whitted has a hard umbra");
+    let wide = render(
+        leaf_scene(),
+        &with_method(base.clone(), Method::Lmm, 0.08, 2.5),
+    );
+    let narrow = render(
+        leaf_scene(),
+        &with_method(base.clone(), Method::Lmm, 0.01, 2.5),
+    );
+    let lit = brightest(&whitted);
+    assert!(
+        darkest(&wide) > 0.4 * lit,
+        "wide penumbra keeps the leaf's shadow light: {}",
+        darkest(&wide) / lit
+    );
+    assert!(
+        darkest(&narrow) < 0.05 * lit,
+        "small h·kI restores the umbra: {}",
+        darkest(&narrow) / lit
+    );
+}
+
+/// A floor meeting a lit wall: LMM1 counts nodes behind the wall, which do
+/// not see the light, and darkens the floor along the corner; LMM's
+/// point-to-node tests drop them.
+#[test]
+fn lmm1_darkens_a_concave_corner_and_lmm_does_not() {
+    let corner = || {
+        let mut scene = empty_scene();
+        let m = add_material(&mut scene, lambert(Vec3::splat(0.5)));
+        let wall = [
+            Vec3::new(0.0, 0.0, -3.0),
+            Vec3::new(0.0, 0.0, 3.0),
+            Vec3::new(0.0, 3.0, 3.0),
+            Vec3::new(0.0, 3.0, -3.0),
+        ];
+        // The floor runs on past the wall, as a street runs past a facade.
+        add_quads(&mut scene, &[floor_quad(0.0, 3.0), wall], 2, m);
+        add_light(
+            &mut scene,
+            LightKind::Point,
+            20.0,
+            DMat4::from_translation(DVec3::new(-1.5, 2.0, 0.0)),
+        );
+        // Looking down at the floor on the light's side of the wall (x < 0).
+        add_camera(
+            &mut scene,
+            lmanim::scene::Projection::Orthographic {
+                xmag: 0.5,
+                ymag: 0.5,
+                znear: 0.0,
+                zfar: 100.0,
+            },
+            DMat4::from_rotation_translation(
+                DQuat::from_rotation_x(-std::f64::consts::FRAC_PI_2),
+                DVec3::new(-0.5, 2.0, 0.0),
+            ),
+        );
+        scene
+    };
+    let base = settings(32, 32);
+    let whitted = render(corner(), &base);
+    let lmm = render(corner(), &with_method(base.clone(), Method::Lmm, 0.1, 2.5));
+    let lmm1 = render(corner(), &with_method(base.clone(), Method::Lmm1, 0.1, 2.5));
+    // The right-hand columns are the floor within 0.25 m of the wall.
+    let mean_near_wall = |image: &Image| {
+        let mut sum = 0.0;
+        for y in 0..32 {
+            for x in 24..32 {
+                sum += pixel(image, x, y).x / pixel(&whitted, x, y).x;
+            }
+        }
+        sum / (32.0 * 8.0)
+    };
+    let lmm_ratio = mean_near_wall(&lmm);
+    let lmm1_ratio = mean_near_wall(&lmm1);
+    assert!(
+        (lmm_ratio - 1.0).abs() < 1e-5,
+        "LMM equals Whitted at the corner: {lmm_ratio}"
+    );
+    assert!(
+        lmm1_ratio < 0.9,
+        "LMM1 leaks darkness from behind the wall: {lmm1_ratio}"
+    );
+}
+
+#[test]
+fn points_and_surfaces_on_lattice_nodes_and_planes_stay_finite() {
+    // A blocker whose top and edges lie exactly on lattice planes. Render
+    // space is centred on the scene's bounds: with the floor at y = 0 and
+    // the blocker at y_b, the centre is y_b / 2 (x and z stay 0), so the
+    // blocker's render height is y_b / 2 = (g + 2)·h for y_b = 2(g + 2)·h.
+    let h = 0.25f32;
+    let mut scene = lit_floor();
+    let m = add_material(&mut scene, lambert(Vec3::splat(0.5)));
+    let origin = lmanim::lightmesh::lattice::GENERAL_POSITION * h;
+    let y = 2.0 * (origin.y + 2.0 * h);
+    let x0 = origin.x - h;
+    let z0 = origin.z - h;
+    let blocker = [
+        Vec3::new(x0, y, z0 + 2.0 * h),
+        Vec3::new(x0 + 2.0 * h, y, z0 + 2.0 * h),
+        Vec3::new(x0 + 2.0 * h, y, z0),
+        Vec3::new(x0, y, z0),
+    ];
+    add_quads(&mut scene, &[blocker], 1, m);
+    for method in [Method::Lmm, Method::Lmm1] {
+        let image = render(
+            scene.clone(),
+            &with_method(settings(40, 40), method, h, 2.0),
+        );
+        assert!(image
+            .pixels
+            .iter()
+            .all(|p| p.is_finite() && p.min_element() >= 0.0));
+    }
+}
+
+#[test]
+fn nodes_inside_closed_objects_see_no_light_and_do_not_break_shading() {
+    // A closed box on the floor: nodes inside it are occluded from the lamp.
+    let mut scene = lit_floor();
+    let m = add_material(&mut scene, lambert(Vec3::splat(0.5)));
+    let (lo, hi) = (Vec3::new(-0.4, 0.0, -0.4), Vec3::new(0.4, 0.8, 0.4));
+    let faces = [
+        [
+            Vec3::new(lo.x, hi.y, hi.z),
+            Vec3::new(hi.x, hi.y, hi.z),
+            Vec3::new(hi.x, hi.y, lo.z),
+            Vec3::new(lo.x, hi.y, lo.z),
+        ],
+        [
+            Vec3::new(lo.x, lo.y, hi.z),
+            Vec3::new(hi.x, lo.y, hi.z),
+            Vec3::new(hi.x, hi.y, hi.z),
+            Vec3::new(lo.x, hi.y, hi.z),
+        ],
+        [
+            Vec3::new(hi.x, lo.y, lo.z),
+            Vec3::new(lo.x, lo.y, lo.z),
+            Vec3::new(lo.x, hi.y, lo.z),
+            Vec3::new(hi.x, hi.y, lo.z),
+        ],
+        [
+            Vec3::new(hi.x, lo.y, hi.z),
+            Vec3::new(hi.x, lo.y, lo.z),
+            Vec3::new(hi.x, hi.y, lo.z),
+            Vec3::new(hi.x, hi.y, hi.z),
+        ],
+        [
+            Vec3::new(lo.x, lo.y, lo.z),
+            Vec3::new(lo.x, lo.y, hi.z),
+            Vec3::new(lo.x, hi.y, hi.z),
+            Vec3::new(lo.x, hi.y, lo.z),
+        ],
+    ];
+    add_quads(&mut scene, &faces, 2, m);
+    let whitted = render(scene.clone(), &settings(40, 40));
+    let lmm = render(
+        scene.clone(),
+        &with_method(settings(40, 40), Method::Lmm, 0.1, 2.5),
+    );
+    // Far from the box both agree; the box top (lit, its candidate nodes
+    // above it) equals Whitted too: nodes inside the box fail step 2.
+    assert_eq!(pixel(&whitted, 2, 2), pixel(&lmm, 2, 2));
+    assert!(
+        (pixel(&whitted, 20, 20).x - pixel(&lmm, 20, 20).x).abs()
+            <= 1e-6 * pixel(&whitted, 20, 20).x
+    );
+}
+
+#[test]
+fn more_than_a_hundred_lights_use_several_mask_words() {
+    let mut scene = lit_floor();
+    let m = add_material(&mut scene, lambert(Vec3::splat(0.5)));
+    add_quads(&mut scene, &[floor_quad(0.5, 0.3)], 1, m);
+    for i in 0..130 {
+        let angle = i as f64 * 0.37;
+        let position = DVec3::new(
+            angle.cos() * 2.0,
+            1.5 + (i % 7) as f64 * 0.2,
+            angle.sin() * 2.0,
+        );
+        add_light(
+            &mut scene,
+            LightKind::Point,
+            0.5,
+            DMat4::from_translation(position),
+        );
+    }
+    let base = settings(32, 32);
+    let whitted = render(scene.clone(), &base);
+    let (lmm, stats) = lightmesh_stats(scene, &with_method(base, Method::Lmm, 0.05, 2.5));
+    assert!(
+        stats.bits_computed > stats.nodes_computed * 64,
+        "bits beyond the first word were computed"
+    );
+    // Soft shadows differ from hard ones only near edges: the mean agrees.
+    let mean = |image: &Image| {
+        image.pixels.iter().map(|p| p.x as f64).sum::<f64>() / image.pixels.len() as f64
+    };
+    assert!((mean(&lmm) - mean(&whitted)).abs() / mean(&whitted) < 0.05);
+}
+
+#[test]
+fn a_lattice_too_fine_for_the_memory_limit_is_a_clear_error() {
+    let mut settings = with_method(settings(64, 64), Method::Lmm1, 1e-4, 2.5);
+    settings.lightmesh.max_memory_mib = 64;
+    let mut sequence = lmanim::sequence::Sequence::new(lit_floor(), "floor.gltf".into()).unwrap();
+    let backend = lmanim::backend::CpuBackend::new(Some(2)).unwrap();
+    let placed = sequence.place(&settings).unwrap();
+    let mut stats = Default::default();
+    let error = sequence
+        .render(&backend, &placed, &settings, &mut stats)
+        .unwrap_err();
+    let message = error.to_string();
+    assert!(
+        message.contains("floor.gltf") && message.contains("MiB") && message.contains("h ="),
+        "{message}"
+    );
+    assert!(error.is_bad_input());
+}
+
+#[test]
+fn a_lattice_coarser_than_the_scene_still_renders() {
+    let image = render(
+        lit_floor(),
+        &with_method(settings(32, 32), Method::Lmm, 50.0, 2.5),
+    );
+    let whitted = render(lit_floor(), &settings(32, 32));
+    // No occluders: even one enormous cell reproduces formula (1).
+    for (a, b) in whitted.pixels.iter().zip(&image.pixels) {
+        assert!((*a - *b).abs().max_element() <= 1e-6 * a.max_element());
+    }
+}
