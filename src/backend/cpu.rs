@@ -201,7 +201,7 @@ fn render_band(
         }
         Shading::LightMesh { mesh, variant } => {
             let start = Instant::now();
-            let demand = mesh.demand(&points, lights);
+            let demand = mesh.demand(&points, lights)?;
             stats.add_stage_time("demand", start.elapsed().as_secs_f64());
 
             let start = Instant::now();
@@ -213,8 +213,11 @@ fn render_band(
             let variant = *variant;
             let shaded = points
                 .par_iter()
-                .map_init(Scratch::default, |scratch, point| {
-                    let (direct, counts) = mesh.shade(point, lights, job.world, variant, scratch);
+                .enumerate()
+                .map_init(Scratch::default, |scratch, (index, point)| {
+                    let reach = demand.reach_of(index);
+                    let (direct, counts) =
+                        mesh.shade(point, reach, lights, job.world, variant, scratch);
                     (point.weight * (point.emitted() + direct), counts)
                 })
                 .collect();

@@ -1,92 +1,182 @@
-//! Stage 3 of an LMM frame, node demand: for every shading point, the nodes
-//! of its half-ball (steps 1–2) and the lights that can reach it; merged
-//! into one sorted list of distinct (node, light word) entries with the
-//! light bits some point needs there.
+//! Stage 3 of an LMM frame, node demand: for every shading point, the lights
+//! that can reach it and the nodes of its half-ball (steps 1–2), gathered
+//! into per-brick tables of the light bits some point needs at each node.
+//! Neighbouring points share most of their nodes; OR-ing into a brick-shaped
+//! table merges them without sorting millions of entries.
 
 use glam::IVec3;
 use rayon::prelude::*;
+use rustc_hash::FxHashMap;
 
-use super::LightMesh;
+use super::masks::{split, BRICK_NODES};
+use super::{LightMesh, LightMeshError};
 use crate::render::light::RenderLight;
 use crate::render::surface::ShadingPoint;
 
-/// Light bits (word `word` of the mask, lights `64·word ..`) that some
-/// shading point needs at `node`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct NodeDemand {
-    pub node: IVec3,
-    pub word: u32,
-    pub needed: u64,
+/// Light bits needed at each node of one brick: `needed[slot * words + w]`
+/// holds lights `64·w ..` of the node in `slot`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BrickDemand {
+    pub brick: IVec3,
+    pub needed: Box<[u64]>,
 }
 
-/// Points per parallel chunk: large enough that neighbours share nodes and
-/// the local merge removes most duplicates.
-const CHUNK: usize = 4096;
+/// What one frame's shading points need of the light mesh.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Demand {
+    /// Bricks sorted by coordinates.
+    pub bricks: Vec<BrickDemand>,
+    /// Per point, `words` words: bit i set when light i can reach it (what
+    /// shading will ask formula (2) for).
+    pub reach: Vec<u64>,
+    pub words: usize,
+}
 
-impl LightMesh {
-    /// The distinct (node, word) entries `points` need, sorted.
-    pub fn demand(&self, points: &[ShadingPoint], lights: &[RenderLight]) -> Vec<NodeDemand> {
-        let chunks: Vec<Vec<NodeDemand>> = points
-            .par_chunks(CHUNK)
-            .map(|chunk| {
-                let mut entries = Vec::new();
-                let mut nodes = Vec::new();
-                let mut reach = Vec::new();
-                for point in chunk {
-                    reaching_lights(point, lights, &mut reach);
-                    if reach.iter().all(|&word| word == 0) {
-                        continue;
-                    }
-                    nodes.clear();
-                    self.lattice.half_ball(
-                        point.position,
-                        point.geometric_normal,
-                        self.radius(),
-                        &mut nodes,
-                    );
-                    for &node in &nodes {
-                        for (word, &needed) in reach.iter().enumerate() {
-                            if needed != 0 {
-                                entries.push(NodeDemand {
-                                    node,
-                                    word: word as u32,
-                                    needed,
-                                });
-                            }
-                        }
-                    }
-                }
-                merge(entries)
-            })
-            .collect();
-        merge(chunks.into_iter().flatten().collect())
+impl Demand {
+    /// The reaching-lights words of point `index`.
+    pub fn reach_of(&self, index: usize) -> &[u64] {
+        &self.reach[index * self.words..(index + 1) * self.words]
     }
 }
 
-/// Bit i set when light i can reach `point` (what shading will ask for).
-pub fn reaching_lights(point: &ShadingPoint, lights: &[RenderLight], words: &mut Vec<u64>) {
-    words.clear();
-    words.resize(lights.len().div_ceil(64).max(1), 0);
+/// Points per parallel chunk: large enough that neighbours share nodes.
+const CHUNK: usize = 4096;
+
+/// Brick tables under construction, with the last brick touched cached
+/// (consecutive nodes of a half-ball usually share it).
+struct BrickTables {
+    words: usize,
+    index: FxHashMap<IVec3, usize>,
+    bricks: Vec<BrickDemand>,
+    last: Option<(IVec3, usize)>,
+}
+
+impl BrickTables {
+    fn new(words: usize) -> BrickTables {
+        BrickTables {
+            words,
+            index: FxHashMap::default(),
+            bricks: Vec::new(),
+            last: None,
+        }
+    }
+
+    fn table(&mut self, brick: IVec3) -> &mut [u64] {
+        let position = match self.last {
+            Some((last, position)) if last == brick => position,
+            _ => {
+                let words = self.words;
+                let bricks = &mut self.bricks;
+                let position = *self.index.entry(brick).or_insert_with(|| {
+                    bricks.push(BrickDemand {
+                        brick,
+                        needed: vec![0; BRICK_NODES * words].into_boxed_slice(),
+                    });
+                    bricks.len() - 1
+                });
+                self.last = Some((brick, position));
+                position
+            }
+        };
+        &mut self.bricks[position].needed
+    }
+
+    fn need(&mut self, node: IVec3, lights: &[u64]) {
+        let (brick, slot) = split(node);
+        let words = self.words;
+        let table = self.table(brick);
+        for (word, &bits) in lights.iter().enumerate() {
+            table[slot * words + word] |= bits;
+        }
+    }
+
+    fn absorb(&mut self, other: BrickTables) {
+        for brick in other.bricks {
+            let table = self.table(brick.brick);
+            for (into, from) in table.iter_mut().zip(brick.needed.iter()) {
+                *into |= from;
+            }
+        }
+    }
+}
+
+impl LightMesh {
+    /// What `points` need: reaching lights per point and needed bits per
+    /// node, in bricks. The tables grow with the number of distinct bricks
+    /// the points touch, so their size is checked against the memory limit
+    /// as they grow: a lattice far too fine for the view is refused here,
+    /// before it can exhaust memory.
+    pub fn demand(
+        &self,
+        points: &[ShadingPoint],
+        lights: &[RenderLight],
+    ) -> Result<Demand, LightMeshError> {
+        let words = self.masks().words();
+        let mut reach = vec![0; points.len() * words];
+        reach
+            .par_chunks_mut(words)
+            .zip(points)
+            .for_each(|(point_reach, point)| reaching_lights(point, lights, point_reach));
+
+        let table_bytes = BRICK_NODES * words * std::mem::size_of::<u64>();
+        let brick_limit = self.memory_limit / table_bytes;
+        let too_large = |bricks: usize| self.too_large(bricks.saturating_mul(table_bytes));
+        let tables = points
+            .par_chunks(CHUNK)
+            .zip(reach.par_chunks(CHUNK * words))
+            .try_fold(
+                || BrickTables::new(words),
+                |mut tables, (chunk, chunk_reach)| {
+                    let mut nodes = Vec::new();
+                    for (point, point_reach) in chunk.iter().zip(chunk_reach.chunks(words)) {
+                        if point_reach.iter().all(|&word| word == 0) {
+                            continue;
+                        }
+                        nodes.clear();
+                        self.lattice.half_ball(
+                            point.position,
+                            point.geometric_normal,
+                            self.radius(),
+                            &mut nodes,
+                        );
+                        for &node in &nodes {
+                            tables.need(node, point_reach);
+                        }
+                    }
+                    match tables.bricks.len() {
+                        count if count > brick_limit => Err(too_large(count)),
+                        _ => Ok(tables),
+                    }
+                },
+            )
+            .try_reduce(
+                || BrickTables::new(words),
+                |mut a, b| {
+                    a.absorb(b);
+                    match a.bricks.len() {
+                        count if count > brick_limit => Err(too_large(count)),
+                        _ => Ok(a),
+                    }
+                },
+            )?;
+        let mut bricks = tables.bricks;
+        bricks.par_sort_unstable_by_key(|brick| brick.brick.to_array());
+        Ok(Demand {
+            bricks,
+            reach,
+            words,
+        })
+    }
+}
+
+/// Sets bit i of `words` when light i can reach `point`.
+fn reaching_lights(point: &ShadingPoint, lights: &[RenderLight], words: &mut [u64]) {
+    words.fill(0);
     for (index, light) in lights.iter().enumerate() {
-        if point.reaching(light).is_some() {
+        if light.reaches(point.position, point.geometric_normal, point.shading_normal) {
             words[index / 64] |= 1 << (index % 64);
         }
     }
-}
-
-/// Sorts by (node, word) and ORs duplicates together.
-fn merge(mut entries: Vec<NodeDemand>) -> Vec<NodeDemand> {
-    entries.par_sort_unstable_by_key(|entry| (entry.node.to_array(), entry.word));
-    let mut merged: Vec<NodeDemand> = Vec::with_capacity(entries.len() / 4);
-    for entry in entries {
-        match merged.last_mut() {
-            Some(last) if last.node == entry.node && last.word == entry.word => {
-                last.needed |= entry.needed
-            }
-            _ => merged.push(entry),
-        }
-    }
-    merged
 }
 
 #[cfg(test)]
@@ -94,34 +184,18 @@ mod tests {
     use super::*;
 
     #[test]
-    fn merge_dedupes_and_ors_the_needed_bits() {
-        let a = IVec3::new(1, 2, 3);
-        let b = IVec3::new(-1, 0, 0);
-        let entries = vec![
-            NodeDemand {
-                node: a,
-                word: 0,
-                needed: 1,
-            },
-            NodeDemand {
-                node: b,
-                word: 0,
-                needed: 4,
-            },
-            NodeDemand {
-                node: a,
-                word: 0,
-                needed: 2,
-            },
-            NodeDemand {
-                node: a,
-                word: 1,
-                needed: 8,
-            },
-        ];
-        let merged = merge(entries);
-        assert_eq!(merged.len(), 3);
-        let first_a = merged.iter().find(|e| e.node == a && e.word == 0).unwrap();
-        assert_eq!(first_a.needed, 3);
+    fn tables_or_the_needs_of_shared_nodes_together() {
+        let mut a = BrickTables::new(2);
+        a.need(IVec3::new(1, 2, 3), &[1, 0]);
+        a.need(IVec3::new(-1, 0, 0), &[0, 4]);
+        let mut b = BrickTables::new(2);
+        b.need(IVec3::new(1, 2, 3), &[2, 8]);
+        a.absorb(b);
+        assert_eq!(a.bricks.len(), 2);
+        let (brick, slot) = split(IVec3::new(1, 2, 3));
+        let table = a.table(brick);
+        assert_eq!(&table[slot * 2..slot * 2 + 2], &[3, 8]);
+        let (brick, slot) = split(IVec3::new(-1, 0, 0));
+        assert_eq!(&a.table(brick)[slot * 2..slot * 2 + 2], &[0, 4]);
     }
 }

@@ -1,21 +1,23 @@
 //! Stage 4 of an LMM frame, mask fill: the (node, light) bits that the
 //! demand asks for and no earlier frame computed, one shadow segment from
-//! the node to the light each, in parallel. This is the only place node
-//! masks are written.
+//! the node to the light each, in parallel over bricks. This is the only
+//! place node masks are written.
 
 use rayon::prelude::*;
 
-use super::demand::NodeDemand;
-use super::masks::MaskStore;
+use super::demand::{BrickDemand, Demand};
+use super::masks::{join, MaskStore, BRICK_NODES};
 use super::{LightMesh, LightMeshError, LightMeshStats};
 use crate::accel::World;
 use crate::render::light::RenderLight;
 
-/// Bits computed for one (node, word) entry.
-struct Filled {
-    demand: NodeDemand,
-    computed: u64,
-    visible: u64,
+/// Bits computed for one brick, laid out like the demand's table.
+struct FilledBrick {
+    computed: Box<[u64]>,
+    visible: Box<[u64]>,
+    nodes: u64,
+    bits_needed: u64,
+    bits_computed: u64,
 }
 
 impl LightMesh {
@@ -24,80 +26,91 @@ impl LightMesh {
     /// limit.
     pub fn fill(
         &mut self,
-        demand: &[NodeDemand],
+        demand: &Demand,
         lights: &[RenderLight],
         world: &World,
         stats: &mut LightMeshStats,
     ) -> Result<(), LightMeshError> {
         self.check_memory(demand, lights.len())?;
-        let masks = &self.masks;
-        let lattice = self.lattice;
-        let filled: Vec<Filled> = demand
+        let filled: Vec<FilledBrick> = demand
+            .bricks
             .par_iter()
-            .filter_map(|entry| {
-                let valid = masks
-                    .node(entry.node)
-                    .map_or(0, |mask| mask.valid[entry.word as usize]);
-                let missing = entry.needed & !valid;
-                if missing == 0 {
-                    return None;
-                }
-                let x = lattice.node_position(entry.node);
-                let mut visible = 0;
-                let mut bits = missing;
-                while bits != 0 {
-                    let bit = bits.trailing_zeros();
-                    bits &= bits - 1;
-                    let light = &lights[entry.word as usize * 64 + bit as usize];
-                    if !world.occluded(&light.shadow_ray(x)) {
-                        visible |= 1 << bit;
-                    }
-                }
-                Some(Filled {
-                    demand: *entry,
-                    computed: missing,
-                    visible,
-                })
-            })
+            .map(|brick| self.fill_brick(brick, demand.words, lights, world))
             .collect();
-
-        let needed: u64 = demand
-            .iter()
-            .map(|entry| entry.needed.count_ones() as u64)
-            .sum();
-        let computed: u64 = filled.iter().map(|f| f.computed.count_ones() as u64).sum();
-        stats.bits_computed += computed;
-        stats.bits_reused += needed - computed;
-        // Entries are sorted by node, so a node's words are adjacent.
-        stats.nodes_computed += filled
-            .windows(2)
-            .filter(|pair| pair[0].demand.node != pair[1].demand.node)
-            .count() as u64
-            + (!filled.is_empty()) as u64;
-        for f in filled {
-            self.masks
-                .set_word(f.demand.node, f.demand.word, f.computed, f.visible);
+        for (brick, filled) in demand.bricks.iter().zip(filled) {
+            stats.nodes_computed += filled.nodes;
+            stats.bits_computed += filled.bits_computed;
+            stats.bits_reused += filled.bits_needed - filled.bits_computed;
+            if filled.bits_computed > 0 {
+                self.masks
+                    .merge_brick(brick.brick, &filled.computed, &filled.visible);
+            }
         }
         stats.nodes_cached = self.masks.nodes_cached() as u64;
         Ok(())
     }
 
-    fn check_memory(&self, demand: &[NodeDemand], lights: usize) -> Result<(), LightMeshError> {
-        let mut new_bricks: Vec<_> = demand
-            .iter()
-            .map(|entry| MaskStore::brick_of(entry.node))
-            .filter(|brick| !self.masks.has_brick(*brick))
-            .collect();
-        new_bricks.sort_unstable_by_key(|brick| brick.to_array());
-        new_bricks.dedup();
-        let bytes = (self.masks.brick_count() + new_bricks.len()) * MaskStore::brick_bytes(lights);
+    fn fill_brick(
+        &self,
+        demand: &BrickDemand,
+        words: usize,
+        lights: &[RenderLight],
+        world: &World,
+    ) -> FilledBrick {
+        let stored = self.masks.brick(demand.brick);
+        let mut filled = FilledBrick {
+            computed: vec![0; demand.needed.len()].into_boxed_slice(),
+            visible: vec![0; demand.needed.len()].into_boxed_slice(),
+            nodes: 0,
+            bits_needed: 0,
+            bits_computed: 0,
+        };
+        for slot in 0..BRICK_NODES {
+            let needed = &demand.needed[slot * words..(slot + 1) * words];
+            if needed.iter().all(|&word| word == 0) {
+                continue;
+            }
+            let valid = stored.map(|bits| self.masks.slot_mask(bits, slot).valid);
+            let x = self.lattice.node_position(join(demand.brick, slot));
+            let mut any = false;
+            for word in 0..words {
+                let missing = needed[word] & !valid.map_or(0, |valid| valid[word]);
+                filled.bits_needed += needed[word].count_ones() as u64;
+                filled.bits_computed += missing.count_ones() as u64;
+                let mut bits = missing;
+                while bits != 0 {
+                    let bit = bits.trailing_zeros();
+                    bits &= bits - 1;
+                    if !world.occluded(&lights[word * 64 + bit as usize].shadow_ray(x)) {
+                        filled.visible[slot * words + word] |= 1 << bit;
+                    }
+                }
+                filled.computed[slot * words + word] = missing;
+                any |= missing != 0;
+            }
+            filled.nodes += any as u64;
+        }
+        filled
+    }
+
+    fn check_memory(&self, demand: &Demand, lights: usize) -> Result<(), LightMeshError> {
+        let bytes = self.bytes_after(demand, lights);
         if bytes > self.memory_limit {
-            return Err(LightMeshError::TooLarge {
-                needed_mib: bytes >> 20,
-                limit_mib: self.memory_limit >> 20,
-                h: self.lattice.h,
-            });
+            return Err(self.too_large(bytes));
         }
         Ok(())
+    }
+
+    /// Memory the store will hold after filling `demand`, plus the frame's
+    /// demand and fill tables.
+    fn bytes_after(&self, demand: &Demand, lights: usize) -> usize {
+        let new_bricks = demand
+            .bricks
+            .iter()
+            .filter(|brick| self.masks.brick(brick.brick).is_none())
+            .count();
+        // The store's new bricks plus the frame's demand and fill tables.
+        (self.masks.brick_count() + new_bricks) * MaskStore::brick_bytes(lights)
+            + demand.bricks.len() * MaskStore::brick_bytes(lights) * 3 / 2
     }
 }

@@ -9,7 +9,7 @@
 
 use glam::{IVec3, Vec3};
 
-use super::masks::NodeMask;
+use super::masks::{split, MaskStore, NodeMask};
 use super::LightMesh;
 use crate::accel::offset::offset_ray_origin;
 use crate::accel::{Ray, World};
@@ -48,21 +48,26 @@ impl std::ops::AddAssign for PointCounts {
 #[derive(Default)]
 pub struct Scratch {
     nodes: Vec<IVec3>,
+    /// Per light word: lights visible from every node, from some node.
+    all: Vec<u64>,
+    any: Vec<u64>,
 }
 
 impl LightMesh {
-    /// Direct light at `point` by formula (2). Every bit it reads must have
-    /// been filled from this frame's demand.
+    /// Direct light at `point` by formula (2). `reach` holds the lights that
+    /// can reach the point (from the demand stage); every bit this reads was
+    /// filled from that demand.
     pub fn shade(
         &self,
         point: &ShadingPoint,
+        reach: &[u64],
         lights: &[RenderLight],
         world: &World,
         variant: Variant,
         scratch: &mut Scratch,
     ) -> (Vec3, PointCounts) {
         let mut counts = PointCounts::default();
-        let nodes = &mut scratch.nodes;
+        let Scratch { nodes, all, any } = scratch;
         nodes.clear();
         self.lattice
             .half_ball(point.position, point.geometric_normal, self.radius(), nodes);
@@ -84,29 +89,74 @@ impl LightMesh {
             counts.shadow_rays = shadow_rays;
             return (radiance, counts);
         }
-        let masks: Vec<NodeMask> = nodes
-            .iter()
-            .filter_map(|&node| self.masks().node(node))
-            .collect();
+
+        // Where every node agrees (far from shadow edges, the common case)
+        // a light is fully visible or fully hidden; only lights the nodes
+        // disagree on need their visible nodes counted.
+        let masks = self.masks();
+        all.clear();
+        all.extend_from_slice(reach);
+        any.clear();
+        any.resize(reach.len(), 0);
+        let mut bricks = BrickCursor::default();
+        for &node in nodes.iter() {
+            let mask = bricks.mask(masks, node);
+            for word in 0..reach.len() {
+                debug_assert_eq!(
+                    mask.map_or(0, |m| m.valid[word]) & reach[word],
+                    reach[word],
+                    "formula (2) read a mask bit that the fill stage did not compute"
+                );
+                let visible = mask.map_or(0, |m| m.visible[word]);
+                all[word] &= visible;
+                any[word] |= visible & reach[word];
+            }
+        }
         let mut radiance = Vec3::ZERO;
-        for (index, light) in lights.iter().enumerate() {
-            let Some(omega) = point.omega(light) else {
-                continue;
-            };
-            let visible = masks
-                .iter()
-                .filter(|mask| mask.get(index) == Some(true))
-                .count();
-            debug_assert!(
-                masks.len() == m && masks.iter().all(|mask| mask.get(index).is_some()),
-                "formula (2) read a mask bit that the fill stage did not compute"
-            );
-            if visible == m {
-                radiance += omega;
-            } else if visible > 0 {
-                radiance += omega * (visible as f32 / m as f32);
+        for (word, &lit) in any.iter().enumerate() {
+            let mut bits = lit;
+            while bits != 0 {
+                let bit = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let light = word * 64 + bit;
+                let Some(omega) = point.omega(&lights[light]) else {
+                    continue;
+                };
+                if all[word] >> bit & 1 == 1 {
+                    radiance += omega;
+                } else {
+                    let visible = nodes
+                        .iter()
+                        .filter(|&&node| {
+                            bricks.mask(masks, node).and_then(|m| m.get(light)) == Some(true)
+                        })
+                        .count();
+                    radiance += omega * (visible as f32 / m as f32);
+                }
             }
         }
         (radiance, counts)
+    }
+}
+
+/// Looks up node masks, remembering the last brick: a half-ball's nodes
+/// come in lattice order, so most lookups hit the same brick as the last.
+#[derive(Default)]
+struct BrickCursor<'a> {
+    last: Option<(IVec3, Option<&'a [u64]>)>,
+}
+
+impl<'a> BrickCursor<'a> {
+    fn mask(&mut self, masks: &'a MaskStore, node: IVec3) -> Option<NodeMask<'a>> {
+        let (brick, slot) = split(node);
+        let bits = match self.last {
+            Some((last, bits)) if last == brick => bits,
+            _ => {
+                let bits = masks.brick(brick);
+                self.last = Some((brick, bits));
+                bits
+            }
+        };
+        bits.map(|bits| masks.slot_mask(bits, slot))
     }
 }

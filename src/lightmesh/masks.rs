@@ -11,7 +11,8 @@ use rustc_hash::FxHashMap;
 
 /// Nodes along each edge of a brick.
 const BRICK_EDGE: i32 = 8;
-const BRICK_NODES: usize = (BRICK_EDGE * BRICK_EDGE * BRICK_EDGE) as usize;
+/// Nodes in a brick; a node's slot in its brick is in `0..BRICK_NODES`.
+pub const BRICK_NODES: usize = (BRICK_EDGE * BRICK_EDGE * BRICK_EDGE) as usize;
 
 #[derive(Clone, Debug, Default)]
 pub struct MaskStore {
@@ -47,15 +48,30 @@ impl MaskStore {
         }
     }
 
+    /// Words of visibility bits per node: `ceil(nL / 64)`.
+    pub fn words(&self) -> usize {
+        self.words
+    }
+
     /// The node's mask, or None when no bit of it was ever computed.
     pub fn node(&self, node: IVec3) -> Option<NodeMask<'_>> {
         let (brick, slot) = split(node);
-        let bits = self.bricks.get(&brick)?;
+        Some(self.slot_mask(self.bricks.get(&brick)?, slot))
+    }
+
+    /// A brick's bits (per slot: `words` visibility words, then `words`
+    /// validity words), or None when no node in it was ever computed.
+    pub fn brick(&self, brick: IVec3) -> Option<&[u64]> {
+        self.bricks.get(&brick).map(|bits| &bits[..])
+    }
+
+    /// The mask of `slot` within a brick's bits.
+    pub fn slot_mask<'a>(&self, bits: &'a [u64], slot: usize) -> NodeMask<'a> {
         let start = slot * 2 * self.words;
-        Some(NodeMask {
+        NodeMask {
             visible: &bits[start..start + self.words],
             valid: &bits[start + self.words..start + 2 * self.words],
-        })
+        }
     }
 
     /// V(light, node) if it has been computed.
@@ -79,17 +95,42 @@ impl MaskStore {
     pub fn set_word(&mut self, node: IVec3, word: u32, computed: u64, visible: u64) {
         let (brick, slot) = split(node);
         let words = self.words;
+        let mut computed_words = vec![0; words];
+        let mut visible_words = vec![0; words];
+        computed_words[word as usize] = computed;
+        visible_words[word as usize] = visible;
+        self.merge_slot(brick, slot, &computed_words, &visible_words);
+    }
+
+    /// Records a whole brick's computed bits: for each slot, `words` words
+    /// of `computed` say which lights were computed and `visible` their
+    /// values (layout `slot * words + word`).
+    pub fn merge_brick(&mut self, brick: IVec3, computed: &[u64], visible: &[u64]) {
+        let words = self.words;
+        for slot in 0..BRICK_NODES {
+            let range = slot * words..(slot + 1) * words;
+            if computed[range.clone()].iter().any(|&word| word != 0) {
+                self.merge_slot(brick, slot, &computed[range.clone()], &visible[range]);
+            }
+        }
+    }
+
+    fn merge_slot(&mut self, brick: IVec3, slot: usize, computed: &[u64], visible: &[u64]) {
+        let words = self.words;
         let bits = self
             .bricks
             .entry(brick)
             .or_insert_with(|| vec![0; BRICK_NODES * 2 * words].into_boxed_slice());
         let node_bits = &mut bits[slot * 2 * words..(slot + 1) * 2 * words];
-        if computed != 0 && node_bits[words..].iter().all(|&valid| valid == 0) {
+        let was_empty = node_bits[words..].iter().all(|&valid| valid == 0);
+        for word in 0..words {
+            node_bits[word] =
+                (node_bits[word] & !computed[word]) | (visible[word] & computed[word]);
+            node_bits[words + word] |= computed[word];
+        }
+        if was_empty && computed.iter().any(|&word| word != 0) {
             self.nodes += 1;
         }
-        let word = word as usize;
-        node_bits[word] = (node_bits[word] & !computed) | (visible & computed);
-        node_bits[words + word] |= computed;
     }
 
     pub fn has_brick(&self, brick: IVec3) -> bool {
@@ -109,18 +150,25 @@ impl MaskStore {
     pub fn nodes_cached(&self) -> usize {
         self.nodes
     }
-
-    /// The brick holding `node`, for memory estimates before filling.
-    pub fn brick_of(node: IVec3) -> IVec3 {
-        split(node).0
-    }
 }
 
-fn split(node: IVec3) -> (IVec3, usize) {
+/// The brick holding `node` and the node's slot in it.
+pub fn split(node: IVec3) -> (IVec3, usize) {
     let brick = node.div_euclid(IVec3::splat(BRICK_EDGE));
     let local = node.rem_euclid(IVec3::splat(BRICK_EDGE));
     let slot = ((local.z * BRICK_EDGE + local.y) * BRICK_EDGE + local.x) as usize;
     (brick, slot)
+}
+
+/// The node in `slot` of `brick` (the inverse of [`split`]).
+pub fn join(brick: IVec3, slot: usize) -> IVec3 {
+    let edge = BRICK_EDGE as usize;
+    let local = IVec3::new(
+        (slot % edge) as i32,
+        (slot / edge % edge) as i32,
+        (slot / (edge * edge)) as i32,
+    );
+    brick * BRICK_EDGE + local
 }
 
 #[cfg(test)]
@@ -142,6 +190,14 @@ mod tests {
         // A neighbour in the same brick is untouched.
         assert_eq!(store.get(node + IVec3::X, 129), None);
         assert_eq!(store.nodes_cached(), 1);
+    }
+
+    #[test]
+    fn join_inverts_split() {
+        for node in [IVec3::new(-9, 0, 17), IVec3::new(7, -8, -1), IVec3::ZERO] {
+            let (brick, slot) = split(node);
+            assert_eq!(join(brick, slot), node);
+        }
     }
 
     #[test]

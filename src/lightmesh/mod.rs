@@ -88,4 +88,13 @@ impl LightMesh {
     pub fn masks(&self) -> &MaskStore {
         &self.masks
     }
+
+    /// The error for a frame that would need `bytes` of masks and tables.
+    fn too_large(&self, bytes: usize) -> LightMeshError {
+        LightMeshError::TooLarge {
+            needed_mib: bytes >> 20,
+            limit_mib: self.memory_limit >> 20,
+            h: self.lattice.h,
+        }
+    }
 }
