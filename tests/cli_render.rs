@@ -1,0 +1,255 @@
+//! The `lmanim` binary end to end: frames and previews on disk, the stats
+//! JSON, exit codes and one-line errors for bad usage.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use glam::{Vec2, Vec3};
+use lmanim::authoring::{shapes, GltfBuilder, NodeDesc, Primitive};
+use lmanim::scene::{Light, LightKind, Material};
+
+fn lmanim(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lmanim"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn courtyard() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("animations/courtyard.gltf")
+        .display()
+        .to_string()
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+/// Asserts a bad-usage failure: exit code 2 and one line naming `needle`.
+fn assert_bad_usage(output: &Output, needle: &str) {
+    let text = stderr(output);
+    assert_eq!(output.status.code(), Some(2), "{text}");
+    let lines: Vec<&str> = text
+        .lines()
+        .filter(|line| !line.trim().is_empty())
+        .collect();
+    assert_eq!(lines.len(), 1, "one line: {text}");
+    assert!(lines[0].contains(needle), "'{needle}' in {text}");
+}
+
+#[test]
+fn renders_frames_previews_and_stats() {
+    let dir = tempfile::tempdir().unwrap();
+    let pattern = dir.path().join("shot/frame.####.exr");
+    let stats = dir.path().join("stats.json");
+    let output = lmanim(&[
+        &courtyard(),
+        "--frames",
+        "0..2",
+        "--width",
+        "64",
+        "--height",
+        "36",
+        "--method",
+        "whitted",
+        "--out",
+        pattern.to_str().unwrap(),
+        "--png",
+        "--exr-float",
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("rendered 2 frame(s) with whitted"),
+        "{}",
+        stderr(&output)
+    );
+
+    for frame in ["0000", "0001"] {
+        let exr: PathBuf = dir.path().join(format!("shot/frame.{frame}.exr"));
+        let image = lmanim::output::read_exr(&exr).unwrap();
+        assert_eq!((image.width, image.height), (64, 36));
+        assert!(image.pixels.iter().all(|p| p.is_finite()));
+        assert!(
+            image.pixels.iter().any(|p| p.x > 0.0),
+            "the courtyard is lit"
+        );
+        assert!(dir.path().join(format!("shot/frame.{frame}.png")).is_file());
+    }
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path().join("shot"))
+        .unwrap()
+        .filter_map(|entry| entry.ok())
+        .filter(|entry| entry.file_name().to_string_lossy().ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "no temporary files remain");
+
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    assert_eq!(json["method"], "whitted");
+    assert!(json["threads"].as_u64().unwrap() >= 1);
+    assert!(json["total_seconds"].as_f64().unwrap() > 0.0);
+    let frames = json["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 2);
+    assert_eq!(frames[1]["frame"], 1);
+    assert_eq!(frames[0]["rays"]["primary"], 64 * 36);
+    for key in ["shadow", "secondary"] {
+        assert!(
+            frames[0]["rays"][key].as_u64().unwrap() > 0,
+            "{key} rays (mirror, glass, lamps)"
+        );
+    }
+    assert!(frames[0]["shading_points"].as_u64().unwrap() > 0);
+    for stage in ["primary", "secondary", "shade", "resolve", "output"] {
+        assert!(
+            frames[0]["stages"][stage].as_f64().is_some(),
+            "stage {stage}"
+        );
+    }
+    assert!(
+        frames[0].get("lightmesh").is_none(),
+        "Whitted has no light mesh"
+    );
+}
+
+#[test]
+fn light_mesh_methods_report_h_and_their_statistics() {
+    let dir = tempfile::tempdir().unwrap();
+    let stats = dir.path().join("stats.json");
+    let output = lmanim(&[
+        &courtyard(),
+        "--width",
+        "48",
+        "--height",
+        "27",
+        "--method",
+        "lmm1",
+        "--out",
+        dir.path().join("f.#.exr").to_str().unwrap(),
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("light mesh: h = "),
+        "{}",
+        stderr(&output)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    let mesh = &json["frames"][0]["lightmesh"];
+    assert_eq!(mesh["ki"], 2.5);
+    assert!(mesh["h"].as_f64().unwrap() > 0.0);
+    assert!(mesh["nodes_computed"].as_u64().unwrap() > 0);
+    assert_eq!(
+        mesh["mean_p2n_tests"], 0.0,
+        "LMM1 makes no point-to-node tests"
+    );
+    assert!(dir.path().join("f.0.exr").is_file());
+}
+
+#[test]
+fn bad_usage_exits_2_with_one_line() {
+    let scene = courtyard();
+    assert_bad_usage(
+        &lmanim(&[&scene, "--frames", "5..5", "--out", "/tmp/x.#.exr"]),
+        "--frames",
+    );
+    assert_bad_usage(&lmanim(&[&scene, "--width", "0"]), "width");
+    assert_bad_usage(
+        &lmanim(&[&scene, "--camera", "nope", "--out", "/tmp/x.#.exr"]),
+        "main",
+    );
+    assert_bad_usage(
+        &lmanim(&[&scene, "--frames", "0..2", "--out", "/tmp/single.exr"]),
+        "#",
+    );
+    assert_bad_usage(&lmanim(&["/no/such/scene.gltf"]), "/no/such/scene.gltf");
+    // Clap's own usage errors keep its exit code 2 (several lines of help).
+    assert_eq!(lmanim(&[&scene, "--spp", "many"]).status.code(), Some(2));
+}
+
+#[test]
+fn a_bad_settings_file_is_named_with_its_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let settings = dir.path().join("bad.ron");
+    std::fs::write(&settings, "(\n  width: 64,\n  colour: true,\n)\n").unwrap();
+    let output = lmanim(&[&courtyard(), "--settings", settings.to_str().unwrap()]);
+    assert_bad_usage(&output, "bad.ron:3");
+}
+
+#[test]
+fn a_scene_without_a_camera_gets_a_framing_camera() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut builder = GltfBuilder::new();
+    let grey = builder
+        .add_material(&Material {
+            base_color: Vec3::splat(0.5).extend(1.0),
+            metallic: 0.0,
+            ..Material::default()
+        })
+        .unwrap();
+    let floor = builder
+        .add_geometry(&shapes::plane(Vec2::splat(2.0)))
+        .unwrap();
+    let cube = builder
+        .add_geometry(&shapes::cuboid(Vec3::splat(0.3)))
+        .unwrap();
+    for (name, geometry, y) in [("floor", floor, 0.0), ("cube", cube, 0.3)] {
+        let mesh = builder
+            .add_mesh(
+                name,
+                &[Primitive {
+                    geometry,
+                    material: Some(grey),
+                }],
+            )
+            .unwrap();
+        builder
+            .add_node(NodeDesc {
+                translation: Vec3::new(0.0, y, 0.0),
+                mesh: Some(mesh),
+                ..NodeDesc::named(name)
+            })
+            .unwrap();
+    }
+    let lamp = builder
+        .add_light(&Light {
+            name: Some("lamp".into()),
+            kind: LightKind::Point,
+            color: Vec3::ONE,
+            intensity: 20.0,
+            range: None,
+            radius: None,
+        })
+        .unwrap();
+    builder
+        .add_node(NodeDesc {
+            translation: Vec3::new(1.0, 2.0, 1.0),
+            light: Some(lamp),
+            ..NodeDesc::named("lamp")
+        })
+        .unwrap();
+    let scene = dir.path().join("nocamera.glb");
+    builder.write_glb(&scene).unwrap();
+    let frame = dir.path().join("frame.#.exr");
+    let output = lmanim(&[
+        scene.to_str().unwrap(),
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--out",
+        frame.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("automatic framing camera"),
+        "{}",
+        stderr(&output)
+    );
+    let image = lmanim::output::read_exr(&dir.path().join("frame.0.exr")).unwrap();
+    // The framing camera sees the whole floor: the centre is covered and lit.
+    let centre = image.pixels[(16 * 32 + 16) as usize];
+    assert_eq!(centre.w, 1.0);
+    assert!(centre.x > 0.0);
+}
