@@ -160,44 +160,32 @@ fn render_band(
     let lights = &job.frame.lights;
     let bits_before = lightmesh.bits_computed;
     let shaded: Vec<(Vec3, PointCounts)> = match shading {
-        Shading::Whitted => {
-            let start = Instant::now();
-            let shaded = points
-                .par_iter()
-                .map(|point| {
-                    let (direct, shadow_rays) = whitted::direct_light(point, lights, job.world);
-                    let counts = PointCounts {
-                        shadow_rays,
-                        ..PointCounts::default()
-                    };
-                    (point.weight * (point.emitted() + direct), counts)
-                })
-                .collect();
-            stats.add_stage_time("shade", start.elapsed().as_secs_f64());
-            shaded
-        }
+        Shading::Whitted => shade_stage(
+            &points,
+            stats,
+            || (),
+            |_, _, point| {
+                let (direct, shadow_rays) = whitted::direct_light(point, lights, job.world);
+                (direct, PointCounts::shadow_rays(shadow_rays))
+            },
+        ),
         Shading::Area => {
-            let start = Instant::now();
             // Lamp samples are seeded by the sample's index in the whole
             // image; `point.sample` counts from the band's first row.
             let band_start = rows.start as u64 * job.width as u64 * job.spp as u64;
-            let shaded = points
-                .par_iter()
-                .map(|point| {
+            shade_stage(
+                &points,
+                stats,
+                || (),
+                |_, _, point| {
                     let sample = band_start + point.sample as u64;
                     let (direct, shadow_rays) =
                         area::direct_light(point, lights, job.world, |light| {
                             lamp_sample(sample, job.spp, light, point.depth)
                         });
-                    let counts = PointCounts {
-                        shadow_rays,
-                        ..PointCounts::default()
-                    };
-                    (point.weight * (point.emitted() + direct), counts)
-                })
-                .collect();
-            stats.add_stage_time("shade", start.elapsed().as_secs_f64());
-            shaded
+                    (direct, PointCounts::shadow_rays(shadow_rays))
+                },
+            )
         }
         Shading::LightMesh { mesh, variant } => {
             let start = Instant::now();
@@ -208,21 +196,17 @@ fn render_band(
             mesh.fill(&demand, lights, job.world, lightmesh)?;
             stats.add_stage_time("fill", start.elapsed().as_secs_f64());
 
-            let start = Instant::now();
-            let mesh = &**mesh;
-            let variant = *variant;
-            let shaded = points
-                .par_iter()
-                .enumerate()
-                .map_init(Scratch::default, |scratch, (index, point)| {
-                    let reach = demand.reach_of(index);
-                    let (direct, counts) =
-                        mesh.shade(point, reach, lights, job.world, variant, scratch);
-                    (point.weight * (point.emitted() + direct), counts)
-                })
-                .collect();
-            stats.add_stage_time("shade", start.elapsed().as_secs_f64());
-            shaded
+            let (mesh, variant) = (&**mesh, *variant);
+            shade_stage(&points, stats, Scratch::default, |scratch, index, point| {
+                mesh.shade(
+                    point,
+                    demand.reach_of(index),
+                    lights,
+                    job.world,
+                    variant,
+                    scratch,
+                )
+            })
         }
     };
     let mut band_counts = PointCounts::default();
@@ -253,6 +237,28 @@ fn render_band(
         .collect();
     stats.add_stage_time("resolve", start.elapsed().as_secs_f64());
     Ok(pixels)
+}
+
+/// The last stage before resolve: every point's emission plus its direct
+/// light by `direct` (formula (1), (2) or the lamp estimate), weighted by
+/// its path throughput. `init` makes per-thread scratch space.
+fn shade_stage<S>(
+    points: &[ShadingPoint],
+    stats: &mut FrameStats,
+    init: impl Fn() -> S + Send + Sync,
+    direct: impl Fn(&mut S, usize, &ShadingPoint) -> (Vec3, PointCounts) + Send + Sync,
+) -> Vec<(Vec3, PointCounts)> {
+    let start = Instant::now();
+    let shaded = points
+        .par_iter()
+        .enumerate()
+        .map_init(init, |scratch, (index, point)| {
+            let (light, counts) = direct(scratch, index, point);
+            (point.weight * (point.emitted() + light), counts)
+        })
+        .collect();
+    stats.add_stage_time("shade", start.elapsed().as_secs_f64());
+    shaded
 }
 
 /// Stage 1: camera rays of every sample in the band, tile by tile.

@@ -34,6 +34,16 @@ pub struct PointCounts {
     pub shadow_rays: u64,
 }
 
+impl PointCounts {
+    /// The counts of a point shaded with `rays` plain shadow rays.
+    pub fn shadow_rays(rays: u64) -> PointCounts {
+        PointCounts {
+            shadow_rays: rays,
+            ..PointCounts::default()
+        }
+    }
+}
+
 impl std::ops::AddAssign for PointCounts {
     fn add_assign(&mut self, other: PointCounts) {
         self.candidates += other.candidates;
