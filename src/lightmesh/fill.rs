@@ -1,23 +1,38 @@
 //! Stage 4 of an LMM frame, mask fill: the (node, light) bits that the
-//! demand asks for and no earlier frame computed, one shadow segment from
-//! the node to the light each, in parallel over bricks. This is the only
-//! place node masks are written.
+//! demand asks for and are not known, in parallel over bricks. A missing
+//! static bit costs a segment from the node to the light against the static
+//! structure; where that is clear and the dynamic bit is missing, a second
+//! segment against the dynamic objects only. This is the only place node
+//! masks are written.
 
 use rayon::prelude::*;
 
 use super::demand::{BrickDemand, Demand};
-use super::masks::{join, MaskStore, BRICK_NODES};
+use super::masks::{join, LayerUpdate, MaskStore, BRICK_NODES};
 use super::{LightMesh, LightMeshError, LightMeshStats};
 use crate::accel::World;
 use crate::render::light::RenderLight;
 
 /// Bits computed for one brick, laid out like the demand's table.
 struct FilledBrick {
-    computed: Box<[u64]>,
-    visible: Box<[u64]>,
+    update: LayerUpdate,
     nodes: u64,
     bits_needed: u64,
     bits_computed: u64,
+}
+
+/// Runs `test` for every set bit of `bits`; returns the bits it said yes to.
+fn trace_bits(bits: u64, mut test: impl FnMut(u32) -> bool) -> u64 {
+    let mut found = 0;
+    let mut remaining = bits;
+    while remaining != 0 {
+        let bit = remaining.trailing_zeros();
+        remaining &= remaining - 1;
+        if test(bit) {
+            found |= 1 << bit;
+        }
+    }
+    found
 }
 
 impl LightMesh {
@@ -42,8 +57,7 @@ impl LightMesh {
             stats.bits_computed += filled.bits_computed;
             stats.bits_reused += filled.bits_needed - filled.bits_computed;
             if filled.bits_computed > 0 {
-                self.masks
-                    .merge_brick(brick.brick, &filled.computed, &filled.visible);
+                self.masks.merge_brick(brick.brick, &filled.update);
             }
         }
         stats.nodes_cached = self.masks.nodes_cached() as u64;
@@ -59,8 +73,7 @@ impl LightMesh {
     ) -> FilledBrick {
         let stored = self.masks.brick(demand.brick);
         let mut filled = FilledBrick {
-            computed: vec![0; demand.needed.len()].into_boxed_slice(),
-            visible: vec![0; demand.needed.len()].into_boxed_slice(),
+            update: LayerUpdate::zeroed(demand.needed.len()),
             nodes: 0,
             bits_needed: 0,
             bits_computed: 0,
@@ -70,23 +83,33 @@ impl LightMesh {
             if needed.iter().all(|&word| word == 0) {
                 continue;
             }
-            let valid = stored.map(|bits| self.masks.slot_mask(bits, slot).valid);
+            let mask = stored.map(|bits| self.masks.slot_mask(bits, slot));
             let x = self.lattice.node_position(join(demand.brick, slot));
             let mut any = false;
-            for word in 0..words {
-                let missing = needed[word] & !valid.map_or(0, |valid| valid[word]);
-                filled.bits_needed += needed[word].count_ones() as u64;
-                filled.bits_computed += missing.count_ones() as u64;
-                let mut bits = missing;
-                while bits != 0 {
-                    let bit = bits.trailing_zeros();
-                    bits &= bits - 1;
-                    if !world.occluded(&lights[word * 64 + bit as usize].shadow_ray(x)) {
-                        filled.visible[slot * words + word] |= 1 << bit;
-                    }
-                }
-                filled.computed[slot * words + word] = missing;
-                any |= missing != 0;
+            for (word, &needed) in needed.iter().enumerate() {
+                let at = slot * words + word;
+                let (static_visible, static_valid) = mask.map_or((0, 0), |m| m.static_layer(word));
+                let (_, dynamic_valid) = mask.map_or((0, 0), |m| m.dynamic_layer(word));
+                let light = |bit: u32| &lights[word * 64 + bit as usize];
+
+                let missing_static = needed & !static_valid;
+                let found_static = trace_bits(missing_static, |bit| {
+                    !world.occluded_static(&light(bit).shadow_ray(x))
+                });
+                let open = (static_visible & static_valid) | found_static;
+                let missing_dynamic = needed & open & !dynamic_valid;
+                let found_dynamic = trace_bits(missing_dynamic, |bit| {
+                    world.occluded_dynamic(&light(bit).shadow_ray(x))
+                });
+                filled.update.static_computed[at] = missing_static;
+                filled.update.static_visible[at] = found_static;
+                filled.update.dynamic_computed[at] = missing_dynamic;
+                filled.update.dynamic_occluded[at] = found_dynamic;
+
+                let computed = missing_static | missing_dynamic;
+                filled.bits_needed += needed.count_ones() as u64;
+                filled.bits_computed += computed.count_ones() as u64;
+                any |= computed != 0;
             }
             filled.nodes += any as u64;
         }

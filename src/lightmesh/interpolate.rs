@@ -113,11 +113,11 @@ impl LightMesh {
             let mask = bricks.mask(masks, node);
             for word in 0..reach.len() {
                 debug_assert_eq!(
-                    mask.map_or(0, |m| m.valid[word]) & reach[word],
+                    mask.map_or(0, |m| m.valid(word)) & reach[word],
                     reach[word],
                     "formula (2) read a mask bit that the fill stage did not compute"
                 );
-                let visible = mask.map_or(0, |m| m.visible[word]);
+                let visible = mask.map_or(0, |m| m.visible(word));
                 all[word] &= visible;
                 any[word] |= visible & reach[word];
             }

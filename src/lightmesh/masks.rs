@@ -1,10 +1,18 @@
-//! Node masks: per lattice node, one visibility bit and one validity bit per
-//! light, `ceil(nL / 64)` words of each, kept in sparse 8×8×8 bricks in a
-//! hash map keyed by brick coordinates. Only nodes some shading point asked
-//! for ever get a brick, so the lattice has no extent and no up-front cost.
+//! Node masks: per lattice node and light, visibility in two layers, as
+//! DESIGN.md has it: a *static* layer (does the segment from the node to the
+//! light miss the static geometry?) and a *dynamic* layer (does a dynamic
+//! object block it?), each with its own validity bits; the node sees the
+//! light when the static bit is set and no dynamic object blocks it. Moving
+//! objects invalidate only dynamic bits, so re-testing them costs short
+//! traversals of the small dynamic structure; only a moved light touches the
+//! static layer (which is what a disk cache can keep).
 //!
-//! The mask-fill stage is the only writer; the other stages read the store
-//! through shared references, so the shading loop takes no locks.
+//! Each layer holds `ceil(nL / 64)` words of bits and as many of validity per
+//! node, in sparse 8×8×8 bricks in a hash map keyed by brick coordinates.
+//! Only nodes some shading point asked for ever get a brick, so the lattice
+//! has no extent and no up-front cost. The fill stage is the only writer
+//! (invalidation only clears validity); the shading stage reads through
+//! shared references and takes no locks.
 
 use glam::IVec3;
 use rustc_hash::FxHashMap;
@@ -23,19 +31,79 @@ pub struct MaskStore {
     nodes: usize,
 }
 
-/// One node's bits: `visible[i / 64] >> (i % 64)` is V(i, x), meaningful
-/// only where the same bit of `valid` is set.
+/// Groups of `words` words per node, in this order.
+const STATIC_VISIBLE: usize = 0;
+const STATIC_VALID: usize = 1;
+const DYNAMIC_OCCLUDED: usize = 2;
+const DYNAMIC_VALID: usize = 3;
+const GROUPS: usize = 4;
+
+/// One node's bits in both layers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct NodeMask<'a> {
-    pub visible: &'a [u64],
-    pub valid: &'a [u64],
+    bits: &'a [u64],
+    words: usize,
 }
 
 impl NodeMask<'_> {
-    /// V(light, x) if it has been computed.
+    fn group(&self, group: usize, word: usize) -> u64 {
+        self.bits[group * self.words + word]
+    }
+
+    /// Lights `64·word ..` that the node sees: static bit set, no dynamic
+    /// blocker. Meaningful where [`NodeMask::valid`] has the bit.
+    pub fn visible(&self, word: usize) -> u64 {
+        self.group(STATIC_VISIBLE, word) & !self.group(DYNAMIC_OCCLUDED, word)
+    }
+
+    /// Lights whose visibility is known: the static bit is valid, and the
+    /// dynamic bit too unless the static layer already blocks the light.
+    pub fn valid(&self, word: usize) -> u64 {
+        let static_visible = self.group(STATIC_VISIBLE, word);
+        self.group(STATIC_VALID, word) & (!static_visible | self.group(DYNAMIC_VALID, word))
+    }
+
+    /// Static-layer bits: (visible, valid).
+    pub fn static_layer(&self, word: usize) -> (u64, u64) {
+        (
+            self.group(STATIC_VISIBLE, word),
+            self.group(STATIC_VALID, word),
+        )
+    }
+
+    /// Dynamic-layer bits: (occluded, valid).
+    pub fn dynamic_layer(&self, word: usize) -> (u64, u64) {
+        (
+            self.group(DYNAMIC_OCCLUDED, word),
+            self.group(DYNAMIC_VALID, word),
+        )
+    }
+
+    /// V(light, x) if it is known.
     pub fn get(&self, light: usize) -> Option<bool> {
         let (word, bit) = (light / 64, light % 64);
-        (self.valid[word] >> bit & 1 == 1).then_some(self.visible[word] >> bit & 1 == 1)
+        (self.valid(word) >> bit & 1 == 1).then_some(self.visible(word) >> bit & 1 == 1)
+    }
+}
+
+/// Bits computed for a node (or, laid out `slot * words + word`, a brick):
+/// which lights were tested in each layer and what was found.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct LayerUpdate {
+    pub static_computed: Vec<u64>,
+    pub static_visible: Vec<u64>,
+    pub dynamic_computed: Vec<u64>,
+    pub dynamic_occluded: Vec<u64>,
+}
+
+impl LayerUpdate {
+    pub fn zeroed(len: usize) -> LayerUpdate {
+        LayerUpdate {
+            static_computed: vec![0; len],
+            static_visible: vec![0; len],
+            dynamic_computed: vec![0; len],
+            dynamic_occluded: vec![0; len],
+        }
     }
 }
 
@@ -59,78 +127,108 @@ impl MaskStore {
         Some(self.slot_mask(self.bricks.get(&brick)?, slot))
     }
 
-    /// A brick's bits (per slot: `words` visibility words, then `words`
-    /// validity words), or None when no node in it was ever computed.
+    /// A brick's bits (per slot, [`GROUPS`] groups of `words` words), or
+    /// None when no node in it was ever computed.
     pub fn brick(&self, brick: IVec3) -> Option<&[u64]> {
         self.bricks.get(&brick).map(|bits| &bits[..])
     }
 
     /// The mask of `slot` within a brick's bits.
     pub fn slot_mask<'a>(&self, bits: &'a [u64], slot: usize) -> NodeMask<'a> {
-        let start = slot * 2 * self.words;
+        let stride = GROUPS * self.words;
         NodeMask {
-            visible: &bits[start..start + self.words],
-            valid: &bits[start + self.words..start + 2 * self.words],
+            bits: &bits[slot * stride..(slot + 1) * stride],
+            words: self.words,
         }
     }
 
-    /// V(light, node) if it has been computed.
+    /// V(light, node) if it is known.
     pub fn get(&self, node: IVec3, light: usize) -> Option<bool> {
         self.node(node)?.get(light)
     }
 
-    /// Records V(light, node) = `visible`.
-    pub fn set(&mut self, node: IVec3, light: usize, visible: bool) {
-        let bit = 1u64 << (light % 64);
-        self.set_word(
-            node,
-            (light / 64) as u32,
-            bit,
-            if visible { bit } else { 0 },
-        );
-    }
-
-    /// Records the lights of word `word` whose bits are set in `computed`:
-    /// visible where `visible` has the bit, occluded elsewhere.
-    pub fn set_word(&mut self, node: IVec3, word: u32, computed: u64, visible: u64) {
+    /// Records one light's bits at one node: the static layer, and the
+    /// dynamic one where given.
+    pub fn set(
+        &mut self,
+        node: IVec3,
+        light: usize,
+        static_visible: bool,
+        dynamic_occluded: Option<bool>,
+    ) {
         let (brick, slot) = split(node);
-        let words = self.words;
-        let mut computed_words = vec![0; words];
-        let mut visible_words = vec![0; words];
-        computed_words[word as usize] = computed;
-        visible_words[word as usize] = visible;
-        self.merge_slot(brick, slot, &computed_words, &visible_words);
+        let (word, bit) = (light / 64, 1u64 << (light % 64));
+        let mut update = LayerUpdate::zeroed(self.words);
+        update.static_computed[word] = bit;
+        update.static_visible[word] = if static_visible { bit } else { 0 };
+        if let Some(occluded) = dynamic_occluded {
+            update.dynamic_computed[word] = bit;
+            update.dynamic_occluded[word] = if occluded { bit } else { 0 };
+        }
+        self.merge_slot(brick, slot, &update, 0);
     }
 
-    /// Records a whole brick's computed bits: for each slot, `words` words
-    /// of `computed` say which lights were computed and `visible` their
-    /// values (layout `slot * words + word`).
-    pub fn merge_brick(&mut self, brick: IVec3, computed: &[u64], visible: &[u64]) {
+    /// Records a whole brick's computed bits (layout `slot * words + word`).
+    pub fn merge_brick(&mut self, brick: IVec3, update: &LayerUpdate) {
         let words = self.words;
         for slot in 0..BRICK_NODES {
             let range = slot * words..(slot + 1) * words;
-            if computed[range.clone()].iter().any(|&word| word != 0) {
-                self.merge_slot(brick, slot, &computed[range.clone()], &visible[range]);
+            let computed = update.static_computed[range.clone()]
+                .iter()
+                .chain(&update.dynamic_computed[range])
+                .any(|&word| word != 0);
+            if computed {
+                self.merge_slot(brick, slot, update, slot * words);
             }
         }
     }
 
-    fn merge_slot(&mut self, brick: IVec3, slot: usize, computed: &[u64], visible: &[u64]) {
+    fn merge_slot(&mut self, brick: IVec3, slot: usize, update: &LayerUpdate, offset: usize) {
         let words = self.words;
         let bits = self
             .bricks
             .entry(brick)
-            .or_insert_with(|| vec![0; BRICK_NODES * 2 * words].into_boxed_slice());
-        let node_bits = &mut bits[slot * 2 * words..(slot + 1) * 2 * words];
-        let was_empty = node_bits[words..].iter().all(|&valid| valid == 0);
+            .or_insert_with(|| vec![0; BRICK_NODES * GROUPS * words].into_boxed_slice());
+        let node = &mut bits[slot * GROUPS * words..(slot + 1) * GROUPS * words];
+        let was_empty = node[STATIC_VALID * words..(STATIC_VALID + 1) * words]
+            .iter()
+            .all(|&valid| valid == 0);
+        let mut now_valid = false;
         for word in 0..words {
-            node_bits[word] =
-                (node_bits[word] & !computed[word]) | (visible[word] & computed[word]);
-            node_bits[words + word] |= computed[word];
+            let at = |group: usize| group * words + word;
+            let (computed, value) = (
+                update.static_computed[offset + word],
+                update.static_visible[offset + word],
+            );
+            node[at(STATIC_VISIBLE)] = (node[at(STATIC_VISIBLE)] & !computed) | (value & computed);
+            node[at(STATIC_VALID)] |= computed;
+            let (computed, value) = (
+                update.dynamic_computed[offset + word],
+                update.dynamic_occluded[offset + word],
+            );
+            node[at(DYNAMIC_OCCLUDED)] =
+                (node[at(DYNAMIC_OCCLUDED)] & !computed) | (value & computed);
+            node[at(DYNAMIC_VALID)] |= computed;
+            now_valid |= node[at(STATIC_VALID)] != 0;
         }
-        if was_empty && computed.iter().any(|&word| word != 0) {
+        if was_empty && now_valid {
             self.nodes += 1;
         }
+    }
+
+    /// Clears validity bits, brick by brick in parallel: `clear` gets each
+    /// brick's coordinates and a node-slot view of its bits and returns how
+    /// many bits it cleared. Only validity may be cleared.
+    pub fn invalidate<F>(&mut self, clear: F) -> u64
+    where
+        F: Fn(IVec3, &mut BrickValidity) -> u64 + Send + Sync,
+    {
+        use rayon::prelude::*;
+        let words = self.words;
+        self.bricks
+            .par_iter_mut()
+            .map(|(brick, bits)| clear(*brick, &mut BrickValidity { bits, words }))
+            .sum()
     }
 
     pub fn has_brick(&self, brick: IVec3) -> bool {
@@ -143,12 +241,43 @@ impl MaskStore {
 
     /// Heap bytes one brick takes, for memory budgets.
     pub fn brick_bytes(lights: usize) -> usize {
-        BRICK_NODES * 2 * lights.div_ceil(64).max(1) * std::mem::size_of::<u64>()
+        BRICK_NODES * GROUPS * lights.div_ceil(64).max(1) * std::mem::size_of::<u64>()
     }
 
     /// Nodes with at least one valid bit.
     pub fn nodes_cached(&self) -> usize {
         self.nodes
+    }
+}
+
+/// Mutable access to one brick's validity bits, for invalidation.
+pub struct BrickValidity<'a> {
+    bits: &'a mut [u64],
+    words: usize,
+}
+
+impl BrickValidity<'_> {
+    /// Clears the dynamic-layer validity of `lights` (word `word`) at
+    /// `slot`; returns how many valid bits were cleared.
+    pub fn clear_dynamic(&mut self, slot: usize, word: usize, lights: u64) -> u64 {
+        self.clear(slot, DYNAMIC_VALID, word, lights)
+    }
+
+    /// Clears both layers' validity of `lights` at `slot` (a moved light).
+    pub fn clear_both(&mut self, slot: usize, word: usize, lights: u64) -> u64 {
+        self.clear(slot, STATIC_VALID, word, lights) + self.clear(slot, DYNAMIC_VALID, word, lights)
+    }
+
+    /// Lights (word `word`) at `slot` whose dynamic bit is valid.
+    pub fn dynamic_valid(&self, slot: usize, word: usize) -> u64 {
+        self.bits[(slot * GROUPS + DYNAMIC_VALID) * self.words + word]
+    }
+
+    fn clear(&mut self, slot: usize, group: usize, word: usize, lights: u64) -> u64 {
+        let bits = &mut self.bits[(slot * GROUPS + group) * self.words + word];
+        let cleared = *bits & lights;
+        *bits &= !lights;
+        cleared.count_ones() as u64
     }
 }
 
@@ -180,13 +309,27 @@ mod tests {
         let mut store = MaskStore::new(130);
         let node = IVec3::new(-1, 9, -17);
         assert_eq!(store.get(node, 0), None);
-        store.set(node, 129, true);
-        store.set(node, 64, false);
+        store.set(node, 129, true, Some(false));
+        store.set(node, 64, false, None);
         assert_eq!(store.get(node, 129), Some(true));
-        assert_eq!(store.get(node, 64), Some(false));
+        assert_eq!(
+            store.get(node, 64),
+            Some(false),
+            "a static blocker needs no dynamic bit"
+        );
         assert_eq!(store.get(node, 0), None);
-        store.set(node, 129, false);
-        assert_eq!(store.get(node, 129), Some(false));
+        store.set(node, 129, true, Some(true));
+        assert_eq!(
+            store.get(node, 129),
+            Some(false),
+            "a dynamic blocker hides the light"
+        );
+        store.set(node, 1, true, None);
+        assert_eq!(
+            store.get(node, 1),
+            None,
+            "statically visible: the dynamic bit decides"
+        );
         // A neighbour in the same brick is untouched.
         assert_eq!(store.get(node + IVec3::X, 129), None);
         assert_eq!(store.nodes_cached(), 1);
@@ -205,7 +348,7 @@ mod tests {
         let mut store = MaskStore::new(1);
         let nodes: Vec<IVec3> = (-9..9).map(|i| IVec3::new(i, -i, i * 3)).collect();
         for (index, node) in nodes.iter().enumerate() {
-            store.set(*node, 0, index % 2 == 0);
+            store.set(*node, 0, index % 2 == 0, Some(false));
         }
         for (index, node) in nodes.iter().enumerate() {
             assert_eq!(store.get(*node, 0), Some(index % 2 == 0), "{node}");

@@ -10,6 +10,7 @@
 pub mod demand;
 pub mod fill;
 pub mod interpolate;
+pub mod invalidate;
 pub mod lattice;
 pub mod masks;
 pub mod spacing;

@@ -1,0 +1,280 @@
+//! Invalidation between frames (DESIGN.md, "Invalidation rule"): a
+//! (node x, light i) bit can change only if the segment [x, L_i] meets a
+//! region where geometry changed — the old and the new world bounds of every
+//! moved or deformed object — or light i itself moved. Camera motion,
+//! material changes and light colour or intensity changes invalidate
+//! nothing. Moving objects are dynamic, so they only touch the dynamic layer;
+//! a moved light drops both layers of its bits.
+//!
+//! Testing every cached node against every region and light would cost more
+//! than a frame, so whole bricks are culled first against the cone that a
+//! region's bounding sphere casts from the light (a directional light casts
+//! a cylinder); only nodes of bricks inside it get the exact segment test.
+//! Culling is conservative and the node test pads the regions by rounding
+//! error, so a bit that may have changed is always dropped: re-computing it
+//! gives the same value, which is what makes a reused frame equal a cold one.
+
+use glam::Vec3;
+
+use super::masks::{join, BRICK_NODES};
+use super::LightMesh;
+use crate::accel::Ray;
+use crate::render::light::{LightSource, RenderLight};
+
+/// A box of render space whose geometry changed between two frames.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChangedRegion {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl ChangedRegion {
+    /// The region grown by the rounding error of coordinates of its size,
+    /// so that segments grazing it still count as meeting it.
+    fn padded(&self) -> ChangedRegion {
+        let scale =
+            self.min.abs().max(self.max.abs()).max_element() + (self.max - self.min).max_element();
+        let pad = Vec3::splat(16.0 * f32::EPSILON * scale);
+        ChangedRegion {
+            min: self.min - pad,
+            max: self.max + pad,
+        }
+    }
+
+    fn centre(&self) -> Vec3 {
+        0.5 * (self.min + self.max)
+    }
+
+    fn radius(&self) -> f32 {
+        0.5 * (self.max - self.min).length()
+    }
+
+    /// Whether `ray`'s segment (t in [0, t_max]) meets the box (slab test,
+    /// closed intervals).
+    pub fn meets(&self, ray: &Ray) -> bool {
+        let mut t_near = 0.0f32;
+        let mut t_far = ray.t_max;
+        for axis in 0..3 {
+            let (origin, direction) = (ray.origin[axis], ray.direction[axis]);
+            let (low, high) = (self.min[axis], self.max[axis]);
+            if direction == 0.0 {
+                if origin < low || origin > high {
+                    return false;
+                }
+                continue;
+            }
+            let (a, b) = ((low - origin) / direction, (high - origin) / direction);
+            t_near = t_near.max(a.min(b));
+            t_far = t_far.min(a.max(b));
+            if t_near > t_far {
+                return false;
+            }
+        }
+        true
+    }
+}
+
+/// The set of points whose segment to a light may meet a region: for a
+/// positional light the cone from the light around the region's bounding
+/// sphere, for a directional one the cylinder swept from the sphere against
+/// the light's direction.
+#[derive(Clone, Copy, Debug)]
+enum ShadowVolume {
+    /// The light is inside the region's sphere: everything may be affected.
+    Everywhere,
+    Cone {
+        apex: Vec3,
+        axis: Vec3,
+        half_angle: f32,
+    },
+    Cylinder {
+        centre: Vec3,
+        towards: Vec3,
+        radius: f32,
+    },
+}
+
+impl ShadowVolume {
+    fn new(light: &RenderLight, region: &ChangedRegion) -> ShadowVolume {
+        let (centre, radius) = (region.centre(), region.radius());
+        match light.source {
+            LightSource::Directional { towards } => ShadowVolume::Cylinder {
+                centre,
+                towards,
+                radius,
+            },
+            LightSource::Point { position } | LightSource::Spot { position, .. } => {
+                let to_region = centre - position;
+                let distance = to_region.length();
+                if distance <= radius {
+                    return ShadowVolume::Everywhere;
+                }
+                ShadowVolume::Cone {
+                    apex: position,
+                    axis: to_region / distance,
+                    half_angle: (radius / distance).asin(),
+                }
+            }
+        }
+    }
+
+    /// Whether a sphere (a brick's bounds) may meet the volume.
+    fn may_meet(&self, centre: Vec3, radius: f32) -> bool {
+        match *self {
+            ShadowVolume::Everywhere => true,
+            ShadowVolume::Cone {
+                apex,
+                axis,
+                half_angle,
+            } => {
+                // The sphere meets the cone when its centre's angle from the
+                // axis, less the sphere's angular radius, is within the
+                // cone's half-angle (with a margin for rounding).
+                let offset = centre - apex;
+                let distance = offset.length();
+                if distance <= radius {
+                    return true;
+                }
+                let along = offset.dot(axis);
+                let across = (offset - along * axis).length();
+                let angle = across.atan2(along);
+                let sphere = (radius / distance).asin();
+                angle - sphere <= half_angle + 1e-5
+            }
+            ShadowVolume::Cylinder {
+                centre: region,
+                towards,
+                radius: region_radius,
+            } => {
+                // Points whose ray towards the light passes the sphere: the
+                // region lies ahead along `towards`, within the radii.
+                let offset = region - centre;
+                let along = offset.dot(towards);
+                let across = (offset - along * towards).length();
+                along >= -(radius + region_radius) && across <= radius + region_radius
+            }
+        }
+    }
+}
+
+impl LightMesh {
+    /// Drops the bits that geometry changes in `regions` and the moves of
+    /// `moved_lights` can have changed; returns how many valid bits were
+    /// dropped. `lights` are the lights of the new frame.
+    pub fn invalidate(
+        &mut self,
+        regions: &[ChangedRegion],
+        moved_lights: &[usize],
+        lights: &[RenderLight],
+    ) -> u64 {
+        if regions.is_empty() && moved_lights.is_empty() {
+            return 0;
+        }
+        let padded: Vec<ChangedRegion> = regions.iter().map(ChangedRegion::padded).collect();
+        let volumes: Vec<Vec<ShadowVolume>> = lights
+            .iter()
+            .map(|light| {
+                padded
+                    .iter()
+                    .map(|region| ShadowVolume::new(light, region))
+                    .collect()
+            })
+            .collect();
+        let lattice = self.lattice;
+        let brick_radius = lattice.h * 7.0 * 3f32.sqrt() * 0.5 * (1.0 + 1e-5);
+        self.masks.invalidate(|brick, validity| {
+            let mut cleared = 0;
+            for &light in moved_lights {
+                for slot in 0..BRICK_NODES {
+                    cleared += validity.clear_both(slot, light / 64, 1 << (light % 64));
+                }
+            }
+            if padded.is_empty() {
+                return cleared;
+            }
+            let centre = 0.5
+                * (lattice.node_position(join(brick, 0))
+                    + lattice.node_position(join(brick, BRICK_NODES - 1)));
+            for (index, light) in lights.iter().enumerate() {
+                let (word, bit) = (index / 64, 1u64 << (index % 64));
+                let near: Vec<&ChangedRegion> = padded
+                    .iter()
+                    .zip(&volumes[index])
+                    .filter(|(_, volume)| volume.may_meet(centre, brick_radius))
+                    .map(|(region, _)| region)
+                    .collect();
+                if near.is_empty() {
+                    continue;
+                }
+                for slot in 0..BRICK_NODES {
+                    if validity.dynamic_valid(slot, word) & bit == 0 {
+                        continue;
+                    }
+                    let segment = light.shadow_ray(lattice.node_position(join(brick, slot)));
+                    if near.iter().any(|region| region.meets(&segment)) {
+                        cleared += validity.clear_dynamic(slot, word, bit);
+                    }
+                }
+            }
+            cleared
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn region(min: Vec3, max: Vec3) -> ChangedRegion {
+        ChangedRegion { min, max }
+    }
+
+    #[test]
+    fn segments_meet_boxes_they_cross_and_touch() {
+        let unit = region(Vec3::ZERO, Vec3::ONE);
+        let across = Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::new(3.0, 0.0, 0.0), 1.0);
+        assert!(unit.meets(&across));
+        let short = Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::new(0.5, 0.0, 0.0), 1.0);
+        assert!(!unit.meets(&short), "the segment ends before the box");
+        let along_face = Ray::new(Vec3::new(-1.0, 1.0, 0.5), Vec3::new(3.0, 0.0, 0.0), 1.0);
+        assert!(unit.meets(&along_face), "grazing a face counts");
+        let parallel_outside = Ray::new(Vec3::new(-1.0, 1.5, 0.5), Vec3::new(3.0, 0.0, 0.0), 1.0);
+        assert!(!unit.meets(&parallel_outside));
+        let infinite = Ray::new(Vec3::new(0.5, -5.0, 0.5), Vec3::Y, f32::INFINITY);
+        assert!(unit.meets(&infinite));
+    }
+
+    /// The brick cull never rejects a sphere that holds a point whose
+    /// segment to the light meets the region.
+    #[test]
+    fn cones_hold_every_point_whose_segment_meets_the_region() {
+        let light = RenderLight {
+            source: LightSource::Point {
+                position: Vec3::new(0.0, 5.0, 0.0),
+            },
+            power: Vec3::ONE,
+            range: None,
+            lamp_radius: 0.0,
+        };
+        let car = region(Vec3::new(3.0, 0.0, -1.0), Vec3::new(7.0, 1.5, 1.0));
+        let volume = ShadowVolume::new(&light, &car);
+        let mut inside = 0;
+        for i in 0..40 {
+            for j in 0..40 {
+                let x = Vec3::new(
+                    i as f32 * 0.75 - 5.0,
+                    0.3 + (j % 5) as f32 * 0.4,
+                    j as f32 * 0.5 - 10.0,
+                );
+                if car.meets(&light.shadow_ray(x)) {
+                    inside += 1;
+                    assert!(volume.may_meet(x, 0.0), "{x} is in the car's shadow volume");
+                    assert!(volume.may_meet(x + Vec3::splat(0.3), 0.6));
+                }
+            }
+        }
+        assert!(inside > 10);
+        // Far from the cone, a brick is culled.
+        assert!(!volume.may_meet(Vec3::new(-20.0, 0.0, 0.0), 1.0));
+    }
+}

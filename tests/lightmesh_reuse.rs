@@ -1,0 +1,279 @@
+//! Light-mesh masks kept across frames equal masks computed cold: after a
+//! dynamic object moves (a truck passing between a lamp and a facade more
+//! than 15 m from the truck) or a light moves, invalidation drops exactly
+//! enough bits that re-filling them reproduces a cold fill, bit for bit.
+
+use glam::{Affine3A, IVec3, Vec3};
+use lmanim::accel::{World, WorldObject};
+use lmanim::lightmesh::demand::{BrickDemand, Demand};
+use lmanim::lightmesh::invalidate::ChangedRegion;
+use lmanim::lightmesh::lattice::Lattice;
+use lmanim::lightmesh::masks::{join, split, BRICK_NODES};
+use lmanim::lightmesh::{LightMesh, LightMeshStats};
+use lmanim::render::light::{LightSource, RenderLight};
+
+const H: f32 = 0.25;
+
+fn quad(corners: [Vec3; 4]) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    (corners.to_vec(), vec![[0, 1, 2], [0, 2, 3]])
+}
+
+fn cube() -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let p: Vec<Vec3> = (0..8)
+        .map(|i| {
+            Vec3::new((i & 1) as f32, (i >> 1 & 1) as f32, (i >> 2 & 1) as f32) - Vec3::splat(0.5)
+        })
+        .collect();
+    let faces = [
+        [0, 1, 3, 2],
+        [4, 6, 7, 5],
+        [0, 4, 5, 1],
+        [2, 3, 7, 6],
+        [0, 2, 6, 4],
+        [1, 5, 7, 3],
+    ];
+    let triangles = faces
+        .iter()
+        .flat_map(|f| [[f[0], f[1], f[2]], [f[0], f[2], f[3]]])
+        .collect();
+    (p, triangles)
+}
+
+fn lamp(position: Vec3) -> RenderLight {
+    RenderLight {
+        source: LightSource::Point { position },
+        power: Vec3::splat(100.0),
+        range: None,
+        lamp_radius: 0.2,
+    }
+}
+
+/// A truck (4 × 3.5 × 2 m) standing at `x` on the street.
+fn truck_at(x: f32) -> Affine3A {
+    Affine3A::from_scale_rotation_translation(
+        Vec3::new(2.0, 3.5, 2.0),
+        glam::Quat::IDENTITY,
+        Vec3::new(x, 1.75, 0.0),
+    )
+}
+
+struct Street {
+    ground: (Vec<Vec3>, Vec<[u32; 3]>),
+    facade: (Vec<Vec3>, Vec<[u32; 3]>),
+    truck: (Vec<Vec3>, Vec<[u32; 3]>),
+}
+
+impl Street {
+    fn new() -> Street {
+        Street {
+            ground: quad([
+                Vec3::new(-50.0, 0.0, -50.0),
+                Vec3::new(-50.0, 0.0, 50.0),
+                Vec3::new(50.0, 0.0, 50.0),
+                Vec3::new(50.0, 0.0, -50.0),
+            ]),
+            // A facade at x = 30 facing the street (−X).
+            facade: quad([
+                Vec3::new(30.0, 0.0, -10.0),
+                Vec3::new(30.0, 0.0, 10.0),
+                Vec3::new(30.0, 12.0, 10.0),
+                Vec3::new(30.0, 12.0, -10.0),
+            ]),
+            truck: cube(),
+        }
+    }
+
+    fn world(&self, truck: Affine3A) -> World {
+        fn object(
+            mesh: &(Vec<Vec3>, Vec<[u32; 3]>),
+            to_render: Affine3A,
+            dynamic: bool,
+        ) -> WorldObject<'_> {
+            WorldObject {
+                positions: &mesh.0,
+                triangles: &mesh.1,
+                to_render,
+                dynamic,
+            }
+        }
+        World::build(&[
+            object(&self.ground, Affine3A::IDENTITY, false),
+            object(&self.facade, Affine3A::IDENTITY, false),
+            object(&self.truck, truck, true),
+        ])
+    }
+}
+
+/// Every node of the bricks covering the band in front of the facade, all
+/// lights needed.
+fn facade_demand(lattice: &Lattice, lights: usize) -> Demand {
+    let mut bricks: Vec<IVec3> = Vec::new();
+    for (x, y, z) in [
+        (28.5f32, 0.5f32, -1.5f32),
+        (29.5, 0.5, 1.5),
+        (28.5, 3.0, 0.0),
+        (29.5, 3.0, -1.5),
+    ] {
+        let node = ((Vec3::new(x, y, z) - lattice.origin) / lattice.h)
+            .floor()
+            .as_ivec3();
+        bricks.push(split(node).0);
+    }
+    bricks.sort_by_key(|b| b.to_array());
+    bricks.dedup();
+    let words = lights.div_ceil(64);
+    let all = if lights >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << lights) - 1
+    };
+    Demand {
+        bricks: bricks
+            .into_iter()
+            .map(|brick| BrickDemand {
+                brick,
+                needed: vec![all; BRICK_NODES * words].into_boxed_slice(),
+            })
+            .collect(),
+        reach: Vec::new(),
+        words,
+    }
+}
+
+fn mesh(lights: usize) -> LightMesh {
+    LightMesh::new(Lattice::new(H), 2.5, lights, 1 << 30)
+}
+
+/// Visibility of every demanded (node, light) pair.
+fn masks_of(mesh: &LightMesh, demand: &Demand, lights: usize) -> Vec<Option<bool>> {
+    demand
+        .bricks
+        .iter()
+        .flat_map(|brick| (0..BRICK_NODES).map(move |slot| join(brick.brick, slot)))
+        .flat_map(|node| (0..lights).map(move |light| mesh.masks().get(node, light)))
+        .collect()
+}
+
+fn region(bounds: lmanim::accel::Bounds) -> ChangedRegion {
+    ChangedRegion {
+        min: bounds.min,
+        max: bounds.max,
+    }
+}
+
+#[test]
+fn a_truck_passing_far_from_the_facade_invalidates_exactly_its_shadow() {
+    let street = Street::new();
+    // Lamp 0 lights the facade across the street; lamp 1 stands beside it.
+    let lights = vec![
+        lamp(Vec3::new(0.0, 5.0, 0.0)),
+        lamp(Vec3::new(27.0, 5.0, 8.0)),
+    ];
+    let lattice = Lattice::new(H);
+    let demand = facade_demand(&lattice, lights.len());
+
+    let parked = truck_at(-40.0);
+    let passing = truck_at(11.0);
+    let mut world = street.world(parked);
+    let mut reused = mesh(lights.len());
+    let mut stats = LightMeshStats::default();
+    reused.fill(&demand, &lights, &world, &mut stats).unwrap();
+    let before = masks_of(&reused, &demand, lights.len());
+    assert!(
+        before.iter().all(Option::is_some),
+        "every demanded bit is filled"
+    );
+
+    // The truck drives between lamp 0 and the facade, 17 m from it.
+    let old = world.object_bounds(2).unwrap();
+    world.set_transform(2, passing).unwrap();
+    let new = world.object_bounds(2).unwrap();
+    assert!(
+        30.0 - new.max.x > 15.0,
+        "the truck stays more than 15 m from the facade"
+    );
+    let invalidated = reused.invalidate(&[region(old), region(new)], &[], &lights);
+    let mut refill = LightMeshStats::default();
+    reused.fill(&demand, &lights, &world, &mut refill).unwrap();
+
+    let mut cold = mesh(lights.len());
+    cold.fill(&demand, &lights, &world, &mut LightMeshStats::default())
+        .unwrap();
+    let after = masks_of(&reused, &demand, lights.len());
+    assert_eq!(
+        after,
+        masks_of(&cold, &demand, lights.len()),
+        "reused masks equal cold ones"
+    );
+
+    let changed = before.iter().zip(&after).filter(|(a, b)| a != b).count();
+    assert!(
+        changed > 50,
+        "the truck's shadow reaches the facade's nodes: {changed} bits changed"
+    );
+    assert!(
+        invalidated as usize >= changed,
+        "every changed bit was invalidated"
+    );
+    let total = before.len() as u64;
+    assert!(
+        invalidated < total / 2,
+        "only the shadow's bits: {invalidated} of {total}"
+    );
+    assert_eq!(
+        refill.bits_computed, invalidated,
+        "only dropped dynamic bits are re-tested"
+    );
+    // Lamp 1 is beside the facade: the truck cannot touch its bits.
+    let lamp1_changed = before
+        .iter()
+        .zip(&after)
+        .enumerate()
+        .filter(|(i, (a, b))| i % 2 == 1 && a != b)
+        .count();
+    assert_eq!(lamp1_changed, 0);
+}
+
+#[test]
+fn a_moved_light_drops_its_bits_and_refills_like_cold() {
+    let street = Street::new();
+    let world = street.world(truck_at(11.0));
+    let mut lights = vec![
+        lamp(Vec3::new(0.0, 5.0, 0.0)),
+        lamp(Vec3::new(27.0, 5.0, 8.0)),
+    ];
+    let lattice = Lattice::new(H);
+    let demand = facade_demand(&lattice, lights.len());
+    let mut reused = mesh(lights.len());
+    reused
+        .fill(&demand, &lights, &world, &mut LightMeshStats::default())
+        .unwrap();
+
+    lights[0] = lamp(Vec3::new(0.0, 9.0, 4.0));
+    let invalidated = reused.invalidate(&[], &[0], &lights);
+    assert!(invalidated > 0);
+    let mut refill = LightMeshStats::default();
+    reused.fill(&demand, &lights, &world, &mut refill).unwrap();
+    let mut cold = mesh(lights.len());
+    cold.fill(&demand, &lights, &world, &mut LightMeshStats::default())
+        .unwrap();
+    assert_eq!(masks_of(&reused, &demand, 2), masks_of(&cold, &demand, 2));
+    assert!(refill.bits_reused > 0, "lamp 1's bits were kept");
+}
+
+#[test]
+fn camera_and_colour_changes_invalidate_nothing() {
+    let street = Street::new();
+    let world = street.world(truck_at(11.0));
+    let mut lights = vec![lamp(Vec3::new(0.0, 5.0, 0.0))];
+    let demand = facade_demand(&Lattice::new(H), 1);
+    let mut reused = mesh(1);
+    reused
+        .fill(&demand, &lights, &world, &mut LightMeshStats::default())
+        .unwrap();
+    lights[0].power = Vec3::new(5.0, 1.0, 0.5);
+    assert_eq!(reused.invalidate(&[], &[], &lights), 0);
+    let mut refill = LightMeshStats::default();
+    reused.fill(&demand, &lights, &world, &mut refill).unwrap();
+    assert_eq!(refill.bits_computed, 0);
+}
