@@ -3,6 +3,7 @@
 //! Novikov). See DESIGN.md for the data flow of one run.
 
 pub mod accel;
+pub mod anim;
 pub mod authoring;
 pub mod backend;
 pub mod import;

@@ -1,16 +1,23 @@
 //! The `lmanim` command line: parse, call the library, report. Exit codes:
 //! 0 on success, 2 for bad usage or bad input, 1 for other failures.
+//!
+//! `lmanim SCENE [flags]` renders; `lmanim inspect SCENE [flags]` prints the
+//! animation's poses as JSON instead. (A scene file literally named
+//! `inspect` is rendered as `lmanim ./inspect`.)
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Context;
-use clap::Parser;
+use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use lmanim::anim::inspect::inspect;
+use lmanim::anim::ClipSelection;
+use lmanim::import;
 use lmanim::output::{self, ExrPrecision, FramePattern};
-use lmanim::schedule::FrameSet;
+use lmanim::schedule::{FrameSet, Timeline};
 use lmanim::sequence::{self, Job};
 use lmanim::settings::{Method, Settings};
 use lmanim::stats::RunStats;
@@ -18,8 +25,47 @@ use lmanim::stats::RunStats;
 /// Render a glTF scene's animation to an EXR image sequence, with soft
 /// shadows from point lights by the Light Meshes Method.
 #[derive(Debug, Parser)]
-#[command(name = "lmanim", version)]
+#[command(
+    name = "lmanim",
+    version,
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true
+)]
 struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    #[command(flatten)]
+    render: Option<RenderArgs>,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Print the animated pose (node transforms, morph weights, lights and
+    /// cameras in world space) at chosen times as JSON, without rendering.
+    Inspect(InspectArgs),
+}
+
+#[derive(Debug, Args)]
+struct InspectArgs {
+    /// The scene: a .gltf or .glb file.
+    scene: PathBuf,
+    /// Play only this clip (name or index); default: all clips together.
+    #[arg(long)]
+    clip: Option<String>,
+    /// Times in seconds, comma-separated (e.g. `0,0.5,1`).
+    #[arg(long, conflicts_with = "frames")]
+    times: Option<String>,
+    /// Frames to sample, as for rendering (`A..B`, `A..=B`, `N`, `1-30,47`).
+    #[arg(long)]
+    frames: Option<String>,
+    /// Frames per second for --frames [default: the scene's settings file's, or 24].
+    #[arg(long)]
+    fps: Option<f64>,
+}
+
+/// Rendering: the default command.
+#[derive(Debug, Args)]
+struct RenderArgs {
     /// The scene: a .gltf or .glb file.
     scene: PathBuf,
     /// Frames to render: `A..B` (half-open), `A..=B`, `N`, or lists like `1-30,47`.
@@ -94,16 +140,39 @@ impl From<anyhow::Error> for Failure {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    init_logging(cli.quiet);
-    match run(&cli) {
+    let outcome = match (&cli.command, &cli.render) {
+        (Some(Command::Inspect(args)), _) => {
+            init_logging(false);
+            run_inspect(args)
+        }
+        (None, Some(render)) => {
+            init_logging(render.quiet);
+            run(render)
+        }
+        // clap requires SCENE when no subcommand is given.
+        (None, None) => Err(Failure::bad_input(anyhow::anyhow!("no scene given"))),
+    };
+    match outcome {
         Ok(()) => ExitCode::SUCCESS,
         Err(failure) => {
-            // One line, so scripts and render-farm logs can grep it.
-            let message = format!("{:#}", failure.error).replace('\n', " ");
-            eprintln!("lmanim: error: {message}");
+            eprintln!("lmanim: error: {}", one_line(&failure.error));
             ExitCode::from(if failure.bad_input { 2 } else { 1 })
         }
     }
+}
+
+/// The error and its causes on one line, so scripts and render-farm logs
+/// can grep it. Our error types already print their source in their own
+/// message; a cause is appended only where the message lacks it.
+fn one_line(error: &anyhow::Error) -> String {
+    let mut message = error.to_string();
+    for cause in error.chain().skip(1) {
+        let cause = cause.to_string();
+        if !message.contains(&cause) {
+            message = format!("{message}: {cause}");
+        }
+    }
+    message.replace('\n', " ")
 }
 
 fn init_logging(quiet: bool) {
@@ -125,7 +194,7 @@ fn init_logging(quiet: bool) {
         .init();
 }
 
-fn run(cli: &Cli) -> Result<(), Failure> {
+fn run(cli: &RenderArgs) -> Result<(), Failure> {
     let settings = resolve_settings(cli)?;
     let frames = FrameSet::parse(&cli.frames)
         .map_err(|fault| Failure::bad_input(anyhow::anyhow!("--frames {}: {fault}", cli.frames)))?;
@@ -192,7 +261,7 @@ fn run(cli: &Cli) -> Result<(), Failure> {
 }
 
 /// The settings file (given, or the scene's sibling `.ron`), then the flags.
-fn resolve_settings(cli: &Cli) -> Result<Settings, Failure> {
+fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     let sibling = cli.scene.with_extension("ron");
     let file = cli
         .settings
@@ -217,6 +286,72 @@ fn resolve_settings(cli: &Cli) -> Result<Settings, Failure> {
     }
     settings.validate().map_err(Failure::bad_input)?;
     Ok(settings)
+}
+
+/// `lmanim inspect`: the scene posed at the chosen times, as JSON on stdout.
+fn run_inspect(args: &InspectArgs) -> Result<(), Failure> {
+    // The error's own line names the file and the fault; its sources
+    // would only repeat them.
+    let scene = import::load(&args.scene)
+        .map_err(|error| Failure::bad_input(anyhow::anyhow!("{error}")))?;
+    let clips = match &args.clip {
+        None => ClipSelection::All,
+        Some(text) => ClipSelection::parse(&scene, text)
+            .map_err(|fault| Failure::bad_input(anyhow::anyhow!("--clip {text}: {fault}")))?,
+    };
+    let times = match &args.times {
+        Some(text) => parse_times(text)
+            .map_err(|fault| Failure::bad_input(anyhow::anyhow!("--times {text}: {fault}")))?,
+        None => {
+            let text = args.frames.as_deref().unwrap_or("0");
+            let frames = FrameSet::parse(text)
+                .map_err(|fault| Failure::bad_input(anyhow::anyhow!("--frames {text}: {fault}")))?;
+            let timeline = Timeline {
+                fps: inspect_fps(args)?,
+            };
+            frames
+                .frames()
+                .iter()
+                .map(|&frame| timeline.time_of(frame))
+                .collect()
+        }
+    };
+    let report = inspect(&scene, clips, &times);
+    let mut stdout = std::io::stdout().lock();
+    serde_json::to_writer_pretty(&mut stdout, &report).context("writing the report")?;
+    writeln!(stdout).context("writing the report")?;
+    Ok(())
+}
+
+/// Comma-separated finite seconds.
+fn parse_times(text: &str) -> Result<Vec<f64>, String> {
+    text.split(',')
+        .map(|item| match item.trim().parse::<f64>() {
+            Ok(time) if time.is_finite() => Ok(time),
+            _ => Err(format!(
+                "'{}' is not a finite number of seconds",
+                item.trim()
+            )),
+        })
+        .collect()
+}
+
+/// --fps, else the fps of the scene's sibling settings file, else the
+/// default: the same frame times a render of the scene would use.
+fn inspect_fps(args: &InspectArgs) -> Result<f64, Failure> {
+    let sibling = args.scene.with_extension("ron");
+    let fps = match args.fps {
+        Some(fps) => fps,
+        None if sibling.is_file() => Settings::load(&sibling).map_err(Failure::bad_input)?.fps,
+        None => Settings::default().fps,
+    };
+    if fps.is_finite() && fps > 0.0 {
+        Ok(fps)
+    } else {
+        Err(Failure::bad_input(anyhow::anyhow!(
+            "--fps {fps}: it must be a positive number"
+        )))
+    }
 }
 
 fn default_pattern(scene: &Path) -> String {

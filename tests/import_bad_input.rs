@@ -3,6 +3,7 @@
 //! from the library and from the `lmanim` binary (exit code 2, one line on
 //! stderr).
 
+mod anim_support;
 mod import_support;
 
 use std::path::{Path, PathBuf};
@@ -215,7 +216,145 @@ fn corpus(dir: &Path) -> Vec<Case> {
         }),
         "image 0",
     ));
+    cases.extend(animation_cases(dir));
     cases
+}
+
+/// A one-triangle file whose node 0 is animated by one channel, after
+/// `edit`; `output` holds VEC3 values.
+fn animated_triangle(
+    dir: &Path,
+    name: &str,
+    times: &[f32],
+    output: &[[f32; 3]],
+    edit: impl FnOnce(&mut Value),
+) -> PathBuf {
+    let mut bin = Bin::default();
+    let positions = bin.vec3(&TRIANGLE);
+    let input = bin.scalars(times);
+    let output = bin.vec3(output);
+    let mut doc = one_triangle_document(json!({ "attributes": { "POSITION": positions } }));
+    doc["animations"] = json!([{
+        "channels": [{ "sampler": 0, "target": { "node": 0, "path": "translation" } }],
+        "samplers": [{ "input": input, "output": output }],
+    }]);
+    edit(&mut doc);
+    bin.write_embedded(doc, dir, name)
+}
+
+/// A test model of `anim_support` with its JSON edited (the buffer stays
+/// embedded, so accessors keep their data).
+fn edited_model(
+    dir: &Path,
+    name: &str,
+    model: fn(&Path) -> PathBuf,
+    edit: impl FnOnce(&mut Value),
+) -> PathBuf {
+    let written = model(&dir.join(name).with_extension("d"));
+    let mut doc: Value =
+        serde_json::from_slice(&std::fs::read(&written).expect("read")).expect("JSON");
+    edit(&mut doc);
+    write_json(dir, name, &doc)
+}
+
+fn animation_cases(dir: &Path) -> Vec<Case> {
+    let case = |path: PathBuf, fault_word| Case { path, fault_word };
+    let three = [[0.0; 3], [1.0; 3], [2.0; 3]];
+    vec![
+        case(
+            animated_triangle(
+                dir,
+                "times_not_increasing.gltf",
+                &[0.0, 1.0, 1.0],
+                &three,
+                |_| {},
+            ),
+            "strictly increasing",
+        ),
+        case(
+            animated_triangle(dir, "nan_time.gltf", &[0.0, f32::NAN, 2.0], &three, |_| {}),
+            "non-finite",
+        ),
+        case(
+            animated_triangle(
+                dir,
+                "too_few_values.gltf",
+                &[0.0, 1.0, 2.0, 3.0],
+                &three,
+                |_| {},
+            ),
+            "expected 12",
+        ),
+        case(
+            animated_triangle(dir, "cubic_count.gltf", &[0.0, 1.0, 2.0], &three, |doc| {
+                doc["animations"][0]["samplers"][0]["interpolation"] = json!("CUBICSPLINE");
+            }),
+            "CUBICSPLINE",
+        ),
+        case(
+            animated_triangle(
+                dir,
+                "rotation_as_vec3.gltf",
+                &[0.0, 1.0, 2.0],
+                &three,
+                |doc| {
+                    doc["animations"][0]["channels"][0]["target"]["path"] = json!("rotation");
+                },
+            ),
+            "VEC3 of FLOAT, expected VEC4",
+        ),
+        case(
+            animated_triangle(dir, "weights_without_targets.gltf", &[0.0], &three, |doc| {
+                doc["animations"][0]["channels"][0]["target"]["path"] = json!("weights");
+            }),
+            "no mesh with morph targets",
+        ),
+        case(
+            edited_model(dir, "joint_past_skin.gltf", anim_support::skinned, |doc| {
+                doc["skins"][0]["joints"] = json!([0, 1]);
+            }),
+            "to joint 2",
+        ),
+        case(
+            edited_model(
+                dir,
+                "inverse_bind_vec3.gltf",
+                anim_support::skinned,
+                |doc| {
+                    // Accessor 0 is the strip's POSITION, a VEC3.
+                    doc["skins"][0]["inverseBindMatrices"] = json!(0);
+                },
+            ),
+            "expected MAT4 of FLOAT",
+        ),
+        case(
+            edited_model(
+                dir,
+                "joints_without_weights.gltf",
+                anim_support::skinned,
+                |doc| {
+                    let attributes = &mut doc["meshes"][0]["primitives"][0]["attributes"];
+                    attributes
+                        .as_object_mut()
+                        .expect("attributes")
+                        .remove("WEIGHTS_0");
+                },
+            ),
+            "JOINTS_0 without WEIGHTS_0",
+        ),
+        case(
+            edited_model(dir, "mesh_weights_count.gltf", anim_support::morph, |doc| {
+                doc["meshes"][0]["weights"] = json!([0.5, 0.5, 0.5]);
+            }),
+            "3 default weights",
+        ),
+        case(
+            edited_model(dir, "node_weights_count.gltf", anim_support::morph, |doc| {
+                doc["nodes"][0]["weights"] = json!([0.5]);
+            }),
+            "node 0 has 1 weights",
+        ),
+    ]
 }
 
 fn indices_past_vertices(dir: &Path) -> PathBuf {

@@ -16,6 +16,7 @@ use super::{
 /// glTF `componentType` codes.
 const FLOAT: u32 = 5126;
 const UNSIGNED_INT: u32 = 5125;
+const UNSIGNED_SHORT: u32 = 5123;
 /// glTF buffer-view `target` codes.
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -39,6 +40,8 @@ pub struct GltfBuilder {
     has_parent: Vec<bool>,
     pub(super) lights: Vec<Value>,
     pub(super) cameras: Vec<Value>,
+    pub(super) skins: Vec<Value>,
+    pub(super) animations: Vec<Value>,
     pub(super) extensions_used: BTreeSet<&'static str>,
 }
 
@@ -75,9 +78,39 @@ impl GltfBuilder {
                 json!(self.add_floats(&uvs, 2, Some(ARRAY_BUFFER), false)),
             );
         }
+        for (n, set) in geometry.joint_sets.iter().enumerate() {
+            let joints: Vec<u16> = set.joints.iter().flatten().copied().collect();
+            let weights: Vec<f32> = set.weights.iter().flatten().copied().collect();
+            attributes.insert(format!("JOINTS_{n}"), json!(self.add_joints(&joints)));
+            attributes.insert(
+                format!("WEIGHTS_{n}"),
+                json!(self.add_floats(&weights, 4, Some(ARRAY_BUFFER), false)),
+            );
+        }
+        let targets: Vec<Value> = geometry
+            .morph_targets
+            .iter()
+            .map(|target| {
+                let positions: Vec<f32> =
+                    target.positions.iter().flat_map(|p| p.to_array()).collect();
+                let mut object = json!({
+                    "POSITION": self.add_floats(&positions, 3, Some(ARRAY_BUFFER), true)
+                });
+                if !target.normals.is_empty() {
+                    let normals: Vec<f32> =
+                        target.normals.iter().flat_map(|n| n.to_array()).collect();
+                    object["NORMAL"] =
+                        json!(self.add_floats(&normals, 3, Some(ARRAY_BUFFER), false));
+                }
+                object
+            })
+            .collect();
         let indices = self.add_indices(&geometry.indices);
-        self.geometries
-            .push(json!({ "attributes": attributes, "indices": indices }));
+        let mut primitive = json!({ "attributes": attributes, "indices": indices });
+        if !targets.is_empty() {
+            primitive["targets"] = json!(targets);
+        }
+        self.geometries.push(primitive);
         Ok(GeometryId(index))
     }
 
@@ -113,6 +146,15 @@ impl GltfBuilder {
                 object["material"] = json!(material.0);
             }
             objects.push(object);
+        }
+        let targets = |primitive: &Value| primitive["targets"].as_array().map_or(0, Vec::len);
+        if objects
+            .iter()
+            .any(|object| targets(object) != targets(&objects[0]))
+        {
+            return Err(fault(
+                "every primitive of a mesh needs the same number of morph targets".into(),
+            ));
         }
         self.meshes
             .push(json!({ "name": name, "primitives": objects }));
@@ -164,6 +206,7 @@ impl GltfBuilder {
             ("mesh", node.mesh.map(|id| id.0), self.meshes.len()),
             ("light", node.light.map(|id| id.0), self.lights.len()),
             ("camera", node.camera.map(|id| id.0), self.cameras.len()),
+            ("skin", node.skin.map(|id| id.0), self.skins.len()),
         ]
         .into_iter()
         .find(|&(_, id, count)| id.is_some_and(|id| id >= count));
@@ -186,6 +229,15 @@ impl GltfBuilder {
                 Some(false) => {}
             }
         }
+        if let Some(weights) = &node.weights {
+            let targets = node.mesh.map_or(0, |mesh| self.morph_targets_of(mesh));
+            if weights.len() != targets {
+                return Err(fault(format!(
+                    "{} morph weights for a mesh with {targets} morph targets",
+                    weights.len()
+                )));
+            }
+        }
         let object = json::node(&node).map_err(fault)?;
         for child in children {
             self.has_parent[child] = true;
@@ -205,7 +257,7 @@ impl GltfBuilder {
     /// Appends `values` (`width` floats per element) as a FLOAT accessor;
     /// with `bounds`, the per-component min/max that POSITION and animation
     /// inputs must carry. Returns the accessor index.
-    fn add_floats(
+    pub(super) fn add_floats(
         &mut self,
         values: &[f32],
         width: usize,
@@ -240,6 +292,20 @@ impl GltfBuilder {
             accessor["max"] = json!(max);
         }
         self.accessors.push(accessor);
+        self.accessors.len() - 1
+    }
+
+    /// Appends joint indices, four per vertex, as a VEC4 UNSIGNED_SHORT
+    /// accessor (JOINTS_n).
+    fn add_joints(&mut self, joints: &[u16]) -> usize {
+        let bytes: Vec<u8> = joints.iter().flat_map(|j| j.to_le_bytes()).collect();
+        let view = self.add_view(&bytes, Some(ARRAY_BUFFER));
+        self.accessors.push(json!({
+            "bufferView": view,
+            "componentType": UNSIGNED_SHORT,
+            "count": joints.len() / 4,
+            "type": "VEC4",
+        }));
         self.accessors.len() - 1
     }
 
@@ -301,6 +367,35 @@ fn check_geometry(geometry: &Geometry) -> Result<(), String> {
             "{} indices do not make whole triangles",
             geometry.indices.len()
         ));
+    }
+    for (n, set) in geometry.joint_sets.iter().enumerate() {
+        if set.joints.len() != vertices || set.weights.len() != vertices {
+            return Err(format!(
+                "JOINTS_{n}/WEIGHTS_{n} need one element per position"
+            ));
+        }
+        if set
+            .weights
+            .iter()
+            .flatten()
+            .any(|w| !w.is_finite() || *w < 0.0)
+        {
+            return Err(format!("WEIGHTS_{n} must be finite and >= 0"));
+        }
+    }
+    for (t, target) in geometry.morph_targets.iter().enumerate() {
+        let normals = target.normals.len();
+        if target.positions.len() != vertices || (normals != 0 && normals != vertices) {
+            return Err(format!("morph target {t} needs one offset per position"));
+        }
+        if !target
+            .positions
+            .iter()
+            .chain(&target.normals)
+            .all(|v| v.is_finite())
+        {
+            return Err(format!("morph target {t} offsets must be finite"));
+        }
     }
     if let Some(index) = geometry.indices.iter().find(|&&i| i as usize >= vertices) {
         return Err(format!(

@@ -116,6 +116,8 @@ impl GltfBuilder {
             ("meshes", &self.meshes),
             ("materials", &self.materials),
             ("cameras", &self.cameras),
+            ("skins", &self.skins),
+            ("animations", &self.animations),
             ("accessors", &self.accessors),
             ("bufferViews", &self.buffer_views),
         ];

@@ -18,6 +18,10 @@ pub enum AuthoringError {
     Camera { name: String, fault: String },
     #[error("node `{name}`: {fault}")]
     Node { name: String, fault: String },
+    #[error("skin `{name}`: {fault}")]
+    Skin { name: String, fault: String },
+    #[error("animation `{name}`: {fault}")]
+    Animation { name: String, fault: String },
     #[error(transparent)]
     Write(#[from] OutputError),
 }

@@ -242,6 +242,15 @@ pub(super) fn node(node: &NodeDesc) -> Result<Value, String> {
     if let Some(camera) = node.camera {
         object.insert("camera".into(), json!(camera.0));
     }
+    if let Some(skin) = node.skin {
+        object.insert("skin".into(), json!(skin.0));
+    }
+    if let Some(weights) = &node.weights {
+        if !all_finite(weights) {
+            return Err("morph weights must be finite".into());
+        }
+        object.insert("weights".into(), json!(weights));
+    }
     if let Some(light) = node.light {
         object.insert(
             "extensions".into(),

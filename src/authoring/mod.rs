@@ -10,9 +10,13 @@
 //! so a test can compare an import with what it wrote. [`shapes`] makes the
 //! usual test geometry.
 //!
-//! Animation is not written yet; the builder's typed accessors (any
-//! float width, optional bounds) are what samplers and channels will use.
+//! Animation is written from the scene model's own types too: skins
+//! ([`crate::scene::Skin`]), JOINTS_n/WEIGHTS_n and morph targets on a
+//! [`Geometry`], default morph weights on meshes and nodes, and clips
+//! ([`crate::scene::AnimationClip`], every interpolation) whose channels
+//! name nodes by index.
 
+mod animation;
 mod builder;
 pub mod city;
 mod container;
@@ -25,6 +29,8 @@ pub use error::AuthoringError;
 
 use glam::{Mat3, Quat, Vec2, Vec3};
 
+use crate::scene::{JointSet, MorphTarget};
+
 /// Triangle geometry in object space: one glTF primitive's attributes.
 /// Triangles wind counter-clockwise seen from their front.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -36,6 +42,12 @@ pub struct Geometry {
     pub uvs: Vec<Vec2>,
     /// Three indices per triangle.
     pub indices: Vec<u32>,
+    /// JOINTS_n/WEIGHTS_n, each one influence quadruple per position; the
+    /// joint indices index the skin of the node that uses the mesh.
+    pub joint_sets: Vec<JointSet>,
+    /// Morph targets: one POSITION offset per position, and NORMAL offsets
+    /// per normal or none.
+    pub morph_targets: Vec<MorphTarget>,
 }
 
 macro_rules! id_type {
@@ -77,6 +89,10 @@ id_type!(
     /// An index into the glTF `cameras` array.
     CameraId
 );
+id_type!(
+    /// An index into the glTF `skins` array.
+    SkinId
+);
 
 /// One primitive of a mesh: geometry drawn with a material (None: the
 /// glTF default material).
@@ -100,6 +116,10 @@ pub struct NodeDesc {
     pub mesh: Option<MeshId>,
     pub light: Option<LightId>,
     pub camera: Option<CameraId>,
+    /// The skin that deforms the node's mesh.
+    pub skin: Option<SkinId>,
+    /// The node's own default morph weights, one per morph target.
+    pub weights: Option<Vec<f32>>,
 }
 
 impl Default for NodeDesc {
@@ -113,6 +133,8 @@ impl Default for NodeDesc {
             mesh: None,
             light: None,
             camera: None,
+            skin: None,
+            weights: None,
         }
     }
 }

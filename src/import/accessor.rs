@@ -6,6 +6,7 @@
 //! buffer, see [`super::buffers`]) before anything is allocated, so the
 //! memory import uses is bounded by the file's size.
 
+use glam::DMat4;
 use gltf::accessor::{DataType, Dimensions};
 
 use super::error::Fault;
@@ -47,11 +48,7 @@ impl Use<'_, '_> {
                 if vector.iter().all(|value| value.is_finite()) {
                     Ok(vector)
                 } else {
-                    Err(Fault::NonFinite {
-                        accessor: self.accessor.index(),
-                        usage: self.usage.to_owned(),
-                        element,
-                    })
+                    Err(self.non_finite(element))
                 }
             })
             .collect()
@@ -74,6 +71,72 @@ impl Use<'_, '_> {
         Ok(values.into_iter().map(|value| value as u32).collect())
     }
 
+    /// Reads MAT4 elements of FLOAT (inverse bind matrices), column-major
+    /// as glTF stores them. Every value must be finite.
+    pub fn matrices(&self, buffers: &[Vec<u8>]) -> Result<Vec<DMat4>, Fault> {
+        if self.accessor.dimensions() != Dimensions::Mat4
+            || self.accessor.data_type() != DataType::F32
+        {
+            return Err(self.wrong_type("MAT4 of FLOAT"));
+        }
+        let values = self.components(buffers)?;
+        values
+            .chunks_exact(16)
+            .enumerate()
+            .map(|(element, chunk)| {
+                let matrix = DMat4::from_cols_slice(chunk);
+                if matrix.is_finite() {
+                    Ok(matrix)
+                } else {
+                    Err(self.non_finite(element))
+                }
+            })
+            .collect()
+    }
+
+    /// Reads JOINTS_n: VEC4 of unsigned bytes or shorts (not normalized).
+    /// Which joints exist depends on the skin of the node using the mesh,
+    /// so the caller checks the values against it.
+    pub fn joints(&self, buffers: &[Vec<u8>]) -> Result<Vec<[u16; 4]>, Fault> {
+        let small_unsigned = matches!(self.accessor.data_type(), DataType::U8 | DataType::U16);
+        if self.accessor.dimensions() != Dimensions::Vec4
+            || !small_unsigned
+            || self.accessor.normalized()
+        {
+            return Err(self.wrong_type("VEC4 of UNSIGNED_BYTE or UNSIGNED_SHORT"));
+        }
+        let values = self.components(buffers)?;
+        // Both types fit u16 exactly.
+        Ok(values
+            .chunks_exact(4)
+            .map(|chunk| [0, 1, 2, 3].map(|i| chunk[i] as u16))
+            .collect())
+    }
+
+    /// Reads WEIGHTS_n: VEC4 of FLOAT, or of normalized unsigned bytes or
+    /// shorts. Every weight must be finite and non-negative.
+    pub fn weights(&self, buffers: &[Vec<u8>]) -> Result<Vec<[f32; 4]>, Fault> {
+        let allowed = match self.accessor.data_type() {
+            DataType::F32 => !self.accessor.normalized(),
+            DataType::U8 | DataType::U16 => self.accessor.normalized(),
+            _ => false,
+        };
+        if !allowed {
+            return Err(
+                self.wrong_type("VEC4 of FLOAT or of normalized UNSIGNED_BYTE or UNSIGNED_SHORT")
+            );
+        }
+        let weights = self.vectors::<4>(buffers)?;
+        match weights.iter().position(|w| w.iter().any(|&w| w < 0.0)) {
+            None => Ok(weights),
+            Some(element) => Err(Fault::Invalid(format!(
+                "accessor {} ({}) holds a negative weight in element {element}",
+                self.accessor.index(),
+                self.usage
+            ))),
+        }
+    }
+
     fn check_indices(&self, values: &[f64], limit: usize) -> Result<(), Fault> {
         match values.iter().position(|&value| value >= limit as f64) {
             None => Ok(()),
@@ -84,6 +147,14 @@ impl Use<'_, '_> {
                 index: values[element] as u64,
                 limit,
             }),
+        }
+    }
+
+    fn non_finite(&self, element: usize) -> Fault {
+        Fault::NonFinite {
+            accessor: self.accessor.index(),
+            usage: self.usage.to_owned(),
+            element,
         }
     }
 

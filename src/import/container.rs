@@ -124,7 +124,13 @@ fn read_u32(bytes: &[u8], at: usize) -> u32 {
 /// validation relies on (it indexes a primitive's POSITION accessor without a
 /// bounds check) run first.
 pub fn parse_document(json_bytes: &[u8]) -> Result<gltf::Document, Fault> {
-    let root: json::Root = json::deserialize::from_slice(json_bytes).map_err(Fault::Json)?;
+    let root: json::Root = match json::deserialize::from_slice(json_bytes) {
+        Ok(root) => root,
+        Err(error) => match without_pointer_channels(json_bytes) {
+            Some(root) => root.map_err(Fault::Json)?,
+            None => return Err(Fault::Json(error)),
+        },
+    };
     if let Some(extension) = root
         .extensions_required
         .iter()
@@ -139,6 +145,40 @@ pub fn parse_document(json_bytes: &[u8]) -> Result<gltf::Document, Fault> {
         let details = message.trim_start_matches("invalid glTF:").trim();
         Fault::Invalid(details.trim_end_matches(';').to_owned())
     })
+}
+
+/// The document without its KHR_animation_pointer channels, or None when it
+/// has none. Such a channel has no `target.node`, which the glTF crate's
+/// schema requires, so the whole file would otherwise be refused; lmanim
+/// does not animate lights, cameras or materials yet, so the channels are
+/// dropped with a warning and the rest of the file imports.
+fn without_pointer_channels(json_bytes: &[u8]) -> Option<Result<json::Root, serde_json::Error>> {
+    let mut document: serde_json::Value = serde_json::from_slice(json_bytes).ok()?;
+    let mut dropped = 0;
+    for animation in document.get_mut("animations")?.as_array_mut()? {
+        let Some(channels) = animation
+            .get_mut("channels")
+            .and_then(serde_json::Value::as_array_mut)
+        else {
+            continue;
+        };
+        let before = channels.len();
+        channels.retain(|channel| {
+            channel
+                .pointer("/target/path")
+                .and_then(serde_json::Value::as_str)
+                != Some("pointer")
+        });
+        dropped += before - channels.len();
+    }
+    if dropped == 0 {
+        return None;
+    }
+    log::warn!(
+        "ignoring {dropped} KHR_animation_pointer channel(s): animating lights, cameras and \
+         materials is not supported yet"
+    );
+    Some(serde_json::from_value(document))
 }
 
 fn check_primitive_accessors(root: &json::Root) -> Result<(), Fault> {

@@ -123,6 +123,14 @@ pub enum Fault {
     },
     #[error("scene {scene} lists node {node} twice")]
     RootTwice { scene: usize, node: usize },
+    #[error("animation {animation} channel {channel}: {problem}")]
+    Animation {
+        animation: usize,
+        channel: usize,
+        problem: String,
+    },
+    #[error("skin {skin}: {problem}")]
+    Skin { skin: usize, problem: String },
     #[error("light {light}: {problem}")]
     Light { light: usize, problem: String },
     #[error("camera {camera}: {problem}")]

@@ -8,7 +8,7 @@ use gltf::mesh::{Mode, Semantic};
 
 use super::accessor::Use;
 use super::error::Fault;
-use super::{normals, topology};
+use super::{morph, normals, skin, topology};
 use crate::scene;
 
 /// Imports `mesh`; primitives without a material get `default_material`.
@@ -21,18 +21,28 @@ pub fn import(
         name: mesh.name().map(str::to_owned),
         ..scene::Mesh::default()
     };
+    let mut first = true;
     for primitive in mesh.primitives() {
         let material = primitive
             .material()
             .index()
             .map_or(default_material, |index| index as u32);
         if let Some(part) = read_primitive(mesh.index(), &primitive, buffers)? {
-            append(&mut merged, part, material, mesh.index(), primitive.index())?;
+            append(
+                &mut merged,
+                part,
+                material,
+                first,
+                (mesh.index(), primitive.index()),
+            )?;
+            first = false;
         }
     }
     if !merged.uvs.is_empty() {
         merged.uvs.resize(merged.positions.len(), Vec2::ZERO);
     }
+    skin::normalize(&mut merged.joint_sets);
+    merged.morph_weights = morph::mesh_weights(mesh, merged.morph_targets.len())?;
     Ok(merged)
 }
 
@@ -42,6 +52,8 @@ struct Part {
     normals: Vec<Vec3>,
     uvs: Option<Vec<Vec2>>,
     triangles: Vec<[u32; 3]>,
+    joint_sets: Vec<scene::JointSet>,
+    morph_targets: Vec<scene::MorphTarget>,
 }
 
 fn read_primitive(
@@ -141,6 +153,8 @@ fn read_primitive(
         None => None,
     };
     Ok(Some(Part {
+        joint_sets: skin::joint_sets(mesh, primitive, buffers, vertex_count)?,
+        morph_targets: morph::targets(mesh, primitive, buffers, vertex_count)?,
         positions,
         normals,
         uvs,
@@ -148,14 +162,17 @@ fn read_primitive(
     }))
 }
 
+/// Appends a primitive's part; `first` says no other primitive has been
+/// appended yet, `(mesh, primitive)` name it in errors.
 fn append(
     merged: &mut scene::Mesh,
     part: Part,
     material: u32,
-    mesh: usize,
-    primitive: usize,
+    first: bool,
+    (mesh, primitive): (usize, usize),
 ) -> Result<(), Fault> {
     let base = merged.positions.len();
+    let added = part.positions.len();
     if u32::try_from(base + part.positions.len()).is_err() {
         return Err(Fault::Primitive {
             mesh,
@@ -164,6 +181,19 @@ fn append(
         });
     }
     let offset = base as u32;
+    morph::append_targets(
+        &mut merged.morph_targets,
+        part.morph_targets,
+        base,
+        added,
+        first,
+    )
+    .map_err(|problem| Fault::Primitive {
+        mesh,
+        primitive,
+        problem,
+    })?;
+    skin::append_joint_sets(&mut merged.joint_sets, base, part.joint_sets, added);
     if let Some(uvs) = part.uvs {
         // Earlier primitives without UVs get zeros, so `uvs` stays parallel
         // to `positions`.

@@ -13,13 +13,20 @@
 //!   _specular (its factor only); a default material is appended for primitives that
 //!   name none;
 //! - KHR_lights_punctual lights with `range`, and `extras.radius` (metres);
-//! - perspective and orthographic cameras.
+//! - perspective and orthographic cameras;
+//! - animation clips (translation, rotation, scale and morph-weight
+//!   channels; STEP, LINEAR and CUBICSPLINE), skins with their inverse bind
+//!   matrices and every JOINTS_n/WEIGHTS_n set (weights normalised), morph
+//!   targets' POSITION and NORMAL offsets and the default weights of meshes
+//!   and nodes.
 //!
-//! Indices of nodes, meshes, materials, lights and cameras are the file's.
+//! Indices of nodes, meshes, materials, lights, cameras, skins and
+//! animations are the file's.
 //!
-//! Not (yet) imported: animation clips, skins' joints and morph targets
-//! (only flagged), textures other than base colour and emissive, texture
-//! transforms, UV sets other than 0.
+//! Not (yet) imported: KHR_animation_pointer channels (the file still
+//! imports, with a warning, without them), morph targets' TANGENT offsets,
+//! textures other than base colour and emissive, texture transforms, UV
+//! sets other than 0.
 //!
 //! Bad files never panic: sizes, bounds and references are checked before
 //! anything is allocated or indexed (see `accessor.rs` and `buffers.rs`), and
@@ -28,6 +35,7 @@
 //! dependency) is caught and reported the same way.
 
 mod accessor;
+mod animation;
 mod buffers;
 mod camera;
 mod container;
@@ -35,8 +43,10 @@ mod error;
 mod lights;
 mod material;
 mod mesh;
+mod morph;
 mod nodes;
 mod normals;
+mod skin;
 mod texture;
 mod topology;
 mod uri;
@@ -79,6 +89,12 @@ fn import(path: &Path) -> Result<SceneDesc, Fault> {
         .meshes()
         .map(|gltf_mesh| mesh::import(&gltf_mesh, &buffers, default_material))
         .collect::<Result<Vec<_>, _>>()?;
+    morph::check_node_weights(&nodes, |mesh| {
+        meshes.get(mesh).map_or(0, |mesh| mesh.morph_targets.len())
+    })?;
+    let skins = skin::import(&document, &buffers)?;
+    skin::check_bindings(&nodes, &meshes, &skins)?;
+    let animations = animation::import(&document, &buffers, &nodes, &meshes)?;
 
     Ok(SceneDesc {
         name: path
@@ -92,6 +108,8 @@ fn import(path: &Path) -> Result<SceneDesc, Fault> {
         textures,
         lights: lights::import(&document)?,
         cameras: camera::import(&document)?,
+        skins,
+        animations,
     })
 }
 

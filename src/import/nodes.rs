@@ -31,6 +31,8 @@ pub fn import(document: &gltf::Document) -> Result<(Vec<Node>, Vec<usize>), Faul
                 camera: node.camera().map(|camera| camera.index()),
                 animated: motion.moved[node.index()],
                 deforms: motion.deforms(&node),
+                skin: node.skin().map(|skin| skin.index()),
+                weights: node.weights().map(<[f32]>::to_vec),
             })
         })
         .collect::<Result<Vec<_>, Fault>>()?;

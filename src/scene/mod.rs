@@ -5,8 +5,15 @@
 //!
 //! World placement is computed by [`pose`] in `f64`, so that scenes far from
 //! the origin keep their precision until the renderer subtracts its anchor.
+//! Animation clips ([`animation`]) and what deforms meshes ([`deformation`])
+//! are plain data too; [`crate::anim`] samples them.
 
+pub mod animation;
+pub mod deformation;
 pub mod pose;
+
+pub use animation::{AnimationClip, Channel, Interpolation, Sampler, Target};
+pub use deformation::{JointSet, MorphTarget, Skin};
 
 use glam::{DMat4, Vec2, Vec3, Vec4};
 
@@ -25,6 +32,9 @@ pub struct SceneDesc {
     pub textures: Vec<Texture>,
     pub lights: Vec<Light>,
     pub cameras: Vec<Camera>,
+    pub skins: Vec<Skin>,
+    /// The file's animations, in file order.
+    pub animations: Vec<AnimationClip>,
 }
 
 /// One node of the scene tree.
@@ -43,6 +53,11 @@ pub struct Node {
     /// The node's mesh changes shape over time (a skin or animated morph
     /// weights): its geometry must be refit per frame.
     pub deforms: bool,
+    /// The skin that deforms this node's mesh (an index into
+    /// `SceneDesc::skins`).
+    pub skin: Option<usize>,
+    /// The node's own default morph weights, which override its mesh's.
+    pub weights: Option<Vec<f32>>,
 }
 
 /// A triangle mesh in object space; all glTF primitives of a mesh are merged,
@@ -59,6 +74,12 @@ pub struct Mesh {
     pub triangles: Vec<[u32; 3]>,
     /// Material index of each triangle, parallel to `triangles`.
     pub triangle_materials: Vec<u32>,
+    /// Skin influences: JOINTS_0/WEIGHTS_0, JOINTS_1/WEIGHTS_1…, each
+    /// parallel to `positions`; empty for a mesh no skin moves.
+    pub joint_sets: Vec<JointSet>,
+    pub morph_targets: Vec<MorphTarget>,
+    /// Default morph weights, one per morph target.
+    pub morph_weights: Vec<f32>,
 }
 
 /// glTF metallic-roughness material, with the extensions lmanim honours.

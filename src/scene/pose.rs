@@ -1,6 +1,8 @@
-//! World placement of every node at one instant. For now this is the rest
-//! pose (the nodes' own TRS); the animation module will sample clips into the
-//! same [`Pose`] so that nothing downstream changes.
+//! Where everything is at one instant: world transforms of the nodes, the
+//! joint matrices of every skin and the morph weights of every node. The
+//! rest pose (the file's own transforms) is built here; [`crate::anim`]
+//! samples clips into the same [`Pose`] (`Pose::at`), so that nothing
+//! downstream knows whether a scene is animated.
 //!
 //! Transforms are composed in `f64`: a scene placed 100 km from the origin
 //! keeps millimetre precision until the renderer subtracts its anchor.
@@ -9,16 +11,32 @@ use glam::DMat4;
 
 use super::SceneDesc;
 
-/// World transform of every node, indexed like `SceneDesc::nodes`.
+/// A posed scene, indexed like the scene's own arrays.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Pose {
+    /// World transform of every node, indexed like `SceneDesc::nodes`.
     pub world: Vec<DMat4>,
+    /// Per skin (indexed like `SceneDesc::skins`), per joint:
+    /// `world(joint) · inverse_bind(joint)`, which takes bind-space vertices
+    /// to world space. As the glTF spec says, the skinned node's own
+    /// transform plays no part.
+    pub joints: Vec<Vec<DMat4>>,
+    /// Per node, the morph weights of its mesh; empty for nodes without a
+    /// mesh that has morph targets.
+    pub weights: Vec<Vec<f32>>,
 }
 
 impl Pose {
-    /// The pose given by the nodes' own transforms. Import has already
-    /// rejected node cycles, so the walk from the roots terminates.
+    /// The pose given by the nodes' own transforms and default weights.
     pub fn rest(scene: &SceneDesc) -> Pose {
+        let locals: Vec<DMat4> = scene.nodes.iter().map(|node| node.local).collect();
+        Pose::from_locals(scene, &locals, default_weights(scene))
+    }
+
+    /// Composes local transforms (one per node) down the tree, and the skin
+    /// matrices from the result. Import has already rejected node cycles,
+    /// so the walk from the roots terminates.
+    pub fn from_locals(scene: &SceneDesc, locals: &[DMat4], weights: Vec<Vec<f32>>) -> Pose {
         let mut world = vec![DMat4::IDENTITY; scene.nodes.len()];
         let mut stack: Vec<(usize, DMat4)> = scene
             .roots
@@ -26,13 +44,53 @@ impl Pose {
             .map(|&root| (root, DMat4::IDENTITY))
             .collect();
         while let Some((index, parent)) = stack.pop() {
-            let node = &scene.nodes[index];
-            let placed = parent * node.local;
+            let placed = parent * locals[index];
             world[index] = placed;
-            stack.extend(node.children.iter().map(|&child| (child, placed)));
+            stack.extend(
+                scene.nodes[index]
+                    .children
+                    .iter()
+                    .map(|&child| (child, placed)),
+            );
         }
-        Pose { world }
+        let joints = scene
+            .skins
+            .iter()
+            .map(|skin| {
+                skin.joints
+                    .iter()
+                    .zip(&skin.inverse_bind)
+                    .map(|(&joint, inverse_bind)| world[joint] * *inverse_bind)
+                    .collect()
+            })
+            .collect();
+        Pose {
+            world,
+            joints,
+            weights,
+        }
     }
+}
+
+/// Each node's default morph weights: the node's own, else its mesh's;
+/// empty for nodes whose mesh has no morph targets. Import has checked that
+/// the counts match the targets.
+pub fn default_weights(scene: &SceneDesc) -> Vec<Vec<f32>> {
+    scene
+        .nodes
+        .iter()
+        .map(|node| {
+            let Some(mesh) = node.mesh.and_then(|mesh| scene.meshes.get(mesh)) else {
+                return Vec::new();
+            };
+            if mesh.morph_targets.is_empty() {
+                return Vec::new();
+            }
+            node.weights
+                .clone()
+                .unwrap_or_else(|| mesh.morph_weights.clone())
+        })
+        .collect()
 }
 
 /// Which nodes may move or deform: a node is dynamic when it, or any node
