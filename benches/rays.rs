@@ -2,8 +2,8 @@
 //! 1920×1080 pinhole camera and shadow segments from the primary hits to 8
 //! point lights, on a procedural city block of more than 1M triangles and on
 //! a ~1k triangle scene, on one thread and on two (rayon). Also the static
-//! BVH's build time, and CWBVH against BVH2 on the city. Figures go to
-//! BENCHMARKS.md ("Ray tracing core").
+//! BVH's build time, and the wide layout against BVH2 on the city. Figures go
+//! to BENCHMARKS.md ("Ray tracing core").
 
 use std::time::{Duration, Instant};
 
@@ -280,8 +280,8 @@ fn bench_world(c: &mut Criterion) {
     }
 }
 
-/// CWBVH against BVH2 (and build presets) over the city's triangles, two
-/// threads.
+/// The wide layout (CWBVH topology, exact boxes) against BVH2, and build
+/// presets, over the city's triangles, two threads.
 fn bench_layouts(c: &mut Criterion) {
     let scene = scenes().remove(0);
     let triangles: Vec<BuildTriangle> = (scene.mesh.triangles.iter().enumerate())
@@ -309,7 +309,7 @@ fn bench_layouts(c: &mut Criterion) {
         ("fast", BvhBuildParams::fast_build()),
         ("medium", BvhBuildParams::medium_build()),
     ];
-    for (layout_name, layout) in [("cwbvh", Layout::Wide), ("bvh2", Layout::Binary)] {
+    for (layout_name, layout) in [("wide", Layout::Wide), ("bvh2", Layout::Binary)] {
         for (preset_name, params) in presets {
             let start = Instant::now();
             let bvh = MeshBvh::build(&triangles, layout, params);

@@ -16,8 +16,9 @@ use obvhs::{
 };
 
 use super::node_test::TraversalRay;
-use super::traverse::{traverse_binary, traverse_wide};
+use super::traverse::{traverse_binary, traverse_wide, Order};
 use super::triangle::WatertightRay;
+use super::wide::WideBvh;
 use super::Ray;
 
 /// Where a stored triangle came from: the object's index in the slice the
@@ -35,9 +36,9 @@ pub struct BuildTriangle {
     pub source: TriangleRef,
 }
 
-/// Which obvhs tree to build. `Wide` (CWBVH, eight children per node,
-/// quantised boxes) traverses faster; `Binary` (BVH2) can be refitted after
-/// the triangles move.
+/// Which tree to build. `Wide` (obvhs' CWBVH topology, eight children per
+/// node, held as our [`WideBvh`] with exact boxes) traverses faster; `Binary`
+/// (obvhs' BVH2) can be refitted after the triangles move.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Layout {
     Wide,
@@ -45,6 +46,12 @@ pub enum Layout {
 }
 
 enum Tree {
+    Wide(WideBvh),
+    Binary(Bvh2),
+}
+
+/// What obvhs builds, before the wide tree is converted to ours.
+enum Built {
     Wide(CwBvh),
     Binary(Bvh2),
 }
@@ -94,26 +101,32 @@ impl MeshBvh {
             .collect();
         let tree = if aabbs.is_empty() {
             match layout {
-                Layout::Wide => Tree::Wide(CwBvh::default()),
-                Layout::Binary => Tree::Binary(Bvh2::default()),
+                Layout::Wide => Built::Wide(CwBvh::default()),
+                Layout::Binary => Built::Binary(Bvh2::default()),
             }
         } else {
             single_threaded(|| match layout {
-                Layout::Wide => Tree::Wide(build_cwbvh(&aabbs, params, &mut Duration::default())),
+                Layout::Wide => Built::Wide(build_cwbvh(&aabbs, params, &mut Duration::default())),
                 Layout::Binary => {
-                    Tree::Binary(build_bvh2(&aabbs, params, &mut Duration::default()))
+                    Built::Binary(build_bvh2(&aabbs, params, &mut Duration::default()))
                 }
             })
         };
         let order = match &tree {
-            Tree::Wide(t) => &t.primitive_indices,
-            Tree::Binary(t) => &t.primitive_indices,
+            Built::Wide(t) => &t.primitive_indices,
+            Built::Binary(t) => &t.primitive_indices,
         };
-        let vertices = order
+        let vertices: Vec<[[f32; 3]; 3]> = order
             .iter()
             .map(|&i| kept[i as usize].vertices.map(|v| v.to_array()))
             .collect();
         let sources = order.iter().map(|&i| kept[i as usize].source).collect();
+        let tree = match tree {
+            Built::Wide(cwbvh) => Tree::Wide(WideBvh::from_cwbvh(&cwbvh, |slot| {
+                aabbs[cwbvh.primitive_indices[slot] as usize]
+            })),
+            Built::Binary(bvh2) => Tree::Binary(bvh2),
+        };
         MeshBvh {
             tree,
             vertices,
@@ -145,7 +158,7 @@ impl MeshBvh {
         let exact = WatertightRay::new(ray.origin, ray.direction, ray.t_max);
         let traversal = TraversalRay::new(ray.origin, ray.direction);
         let t_cull = best.map_or(ray.t_max, |b| b.t);
-        self.walk(&traversal, t_cull, |slot, t_cull| {
+        self.walk(&traversal, Order::Nearest, t_cull, |slot, t_cull| {
             let [a, b, c] = &self.vertices[slot];
             if let Some(hit) = exact.intersect(a, b, c) {
                 let candidate = MeshHit {
@@ -169,7 +182,7 @@ impl MeshBvh {
         let exact = WatertightRay::new(ray.origin, ray.direction, ray.t_max);
         let traversal = TraversalRay::new(ray.origin, ray.direction);
         let mut hit = false;
-        self.walk(&traversal, ray.t_max, |slot, _| {
+        self.walk(&traversal, Order::Octant, ray.t_max, |slot, _| {
             let [a, b, c] = &self.vertices[slot];
             hit = exact.intersect(a, b, c).is_some();
             !hit
@@ -177,9 +190,17 @@ impl MeshBvh {
         hit
     }
 
-    fn walk(&self, ray: &TraversalRay, t_cull: f32, visit: impl FnMut(usize, &mut f32) -> bool) {
+    /// Visits candidate slots; `order` applies to the wide layout (the
+    /// binary one always goes near child first).
+    fn walk(
+        &self,
+        ray: &TraversalRay,
+        order: Order,
+        t_cull: f32,
+        visit: impl FnMut(usize, &mut f32) -> bool,
+    ) {
         match &self.tree {
-            Tree::Wide(t) => traverse_wide(t, ray, t_cull, visit),
+            Tree::Wide(t) => traverse_wide(t, ray, order, t_cull, visit),
             Tree::Binary(t) => traverse_binary(t, ray, t_cull, visit),
         }
     }

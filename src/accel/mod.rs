@@ -1,8 +1,9 @@
 //! Ray tracing core: rays, the watertight triangle test, self-intersection
-//! offsets, BVHs (obvhs) and the two-level [`World`] of one static structure
-//! plus one structure per dynamic object. Everything here works in *render
-//! space*: world space minus the scene's anchor (see `render::frame`), so
-//! coordinates stay small and f32 precise near the camera.
+//! offsets, BVHs (built by obvhs, traversed by our own code) and the
+//! two-level [`World`] of one static structure plus one structure per dynamic
+//! object. Everything here works in *render space*: world space minus the
+//! scene's anchor (see `render::frame`), so coordinates stay small and f32
+//! precise near the camera.
 //!
 //! Robustness without a global epsilon: the triangle test is watertight
 //! ([`triangle`]), BVH box tests are widened by their own rounding-error bound
@@ -18,6 +19,7 @@ pub mod offset;
 pub mod ray;
 mod traverse;
 pub mod triangle;
+mod wide;
 pub mod world;
 
 pub use bounds::Bounds;

@@ -4,20 +4,17 @@
 //! mesh; the watertight triangle test is only as good as the traversal that
 //! reaches it. So every slab interval here is widened by a bound on its own
 //! rounding error (Ize, "Robust BVH Ray Traversal", JCGT 2013), for obvhs'
-//! binary nodes and for its quantised eight-wide nodes alike.
+//! binary nodes and for the eight-wide nodes of [`wide`](super::wide) alike.
 
 use glam::{BVec3A, Vec3, Vec3A, Vec4};
-use obvhs::{aabb::Aabb, cwbvh::node::CwBvhNode};
+use obvhs::aabb::Aabb;
+
+use super::wide::WideNode;
 
 /// `(1 + 2 gamma(3))` of Ize's paper: how far a slab exit may be understated
 /// by the two roundings of `(bound - origin) * inv_dir`, plus the rounding of
 /// `inv_dir` itself.
-const BINARY_SCALE: f32 = 1.0 + 2.0 * gamma(3);
-/// Relative error bound for the quantised child planes of a wide node,
-/// `q * (extent * inv) + (p - origin) * inv`: a handful of roundings, plus
-/// obvhs' quantisation of the child bounds, which may round in by one
-/// rounding of `child - p`.
-const WIDE_GAMMA: f32 = gamma(8);
+pub const BINARY_SCALE: f32 = 1.0 + 2.0 * gamma(3);
 /// Stand-in for `1 / 0` and the largest inverse used: keeps every slab value
 /// finite (so no `0 * inf = NaN`) while far exceeding any real `t`.
 const INV_LIMIT: f32 = 18_446_744_073_709_551_616.0; // 2^64
@@ -32,12 +29,20 @@ const fn gamma(n: u32) -> f32 {
 #[derive(Clone, Copy, Debug)]
 pub struct TraversalRay {
     pub origin: Vec3A,
-    pub direction: Vec3A,
     pub inv_direction: Vec3A,
     /// Axes along which the direction is exactly zero. The ray then lies in
     /// every slab plane through its origin, and `0 * inv` would put it on the
     /// slab's edge instead of inside; such rays take a slower, exact path.
     parallel: BVec3A,
+    /// Axes along which the direction is negative: the near plane of a box
+    /// is then its max.
+    negative: [bool; 3],
+    /// The same as a number, `x` in bit 2, `y` in 1, `z` in 0: obvhs' octant
+    /// order of wide children.
+    pub octant: u32,
+    /// `origin` and `inv_direction` per axis, splatted for the wide test.
+    origin4: [Vec4; 3],
+    inv_direction4: [Vec4; 3],
 }
 
 impl TraversalRay {
@@ -50,11 +55,17 @@ impl TraversalRay {
                 (1.0 / d).clamp(-INV_LIMIT, INV_LIMIT)
             }
         };
+        let inv_direction = Vec3A::new(inv(direction.x), inv(direction.y), inv(direction.z));
         TraversalRay {
             origin: origin.into(),
-            direction: direction.into(),
-            inv_direction: Vec3A::new(inv(direction.x), inv(direction.y), inv(direction.z)),
+            inv_direction,
             parallel: Vec3A::from(direction).cmpeq(Vec3A::ZERO),
+            negative: direction.to_array().map(|d| d < 0.0),
+            octant: (direction.x < 0.0) as u32 * 4
+                + (direction.y < 0.0) as u32 * 2
+                + (direction.z < 0.0) as u32,
+            origin4: origin.to_array().map(Vec4::splat),
+            inv_direction4: inv_direction.to_array().map(Vec4::splat),
         }
     }
 
@@ -78,51 +89,38 @@ impl TraversalRay {
         (t_near <= t_far && t_near <= t_cull * BINARY_SCALE).then_some(t_near)
     }
 
-    /// The obvhs hit mask of the children of a wide node that the ray meets
-    /// in `[0, t_cull]`, widened by the rounding bound; same layout as
-    /// `CwBvhNode::intersect_ray`.
+    /// Which children of a wide node the ray meets in `[0, t_cull]`, as a
+    /// bit per child, and their entry `t`s: [`TraversalRay::enter_box`] for
+    /// eight boxes at once.
     #[inline(always)]
-    pub fn wide_child_mask(&self, node: &CwBvhNode, oct_inv4: u32, t_cull: f32) -> u32 {
-        let scale = node.compute_extent() * self.inv_direction;
-        let offset = (Vec3A::from(node.p) - self.origin) * self.inv_direction;
-        let slack = WIDE_GAMMA * (255.0 * scale.abs() + offset.abs());
+    pub fn enter_children(&self, node: &WideNode, t_cull: f32) -> (u32, [f32; 8]) {
         let t_cull = Vec4::splat(t_cull * BINARY_SCALE);
-        let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
-        let negative = self.direction.cmplt(Vec3A::ZERO);
-        let mut hit_mask = 0;
+        let mut hits = 0;
+        let mut entry = [Vec4::ZERO; 2];
         for half in 0..2 {
-            let q = |v: &[u8; 8]| {
-                let i = half * 4;
-                Vec4::new(
-                    v[i] as f32,
-                    v[i + 1] as f32,
-                    v[i + 2] as f32,
-                    v[i + 3] as f32,
-                )
-            };
-            // Near and far plane of each child along one axis, widened.
-            let axis = |lo: &[u8; 8], hi: &[u8; 8], k: usize, neg: bool| {
-                let (near, far) = if neg { (q(hi), q(lo)) } else { (q(lo), q(hi)) };
-                (
-                    near * scale[k] + offset[k] - slack[k],
-                    far * scale[k] + offset[k] + slack[k],
-                )
-            };
-            let (nx, fx) = axis(&node.child_min_x, &node.child_max_x, 0, negative.test(0));
-            let (ny, fy) = axis(&node.child_min_y, &node.child_max_y, 1, negative.test(1));
-            let (nz, fz) = axis(&node.child_min_z, &node.child_max_z, 2, negative.test(2));
-            let t_near = nx.max(ny).max(nz).max(Vec4::ZERO);
-            let t_far = fx.min(fy).min(fz).min(t_cull);
-            let mask = t_near.cmple(t_far).bitmask();
-            for j in 0..4 {
-                if mask & (1 << j) != 0 {
-                    let slot = (half * 4 + j) * 8;
-                    let child_bits = ((child_bits8 >> slot) & 0xff) as u32;
-                    let bit_index = ((bit_index8 >> slot) & 0xff) as u32;
-                    hit_mask |= child_bits << bit_index;
+            let mut slabs = [0, 1, 2].map(|k| {
+                let planes = &node.planes[k];
+                let side = self.negative[k] as usize;
+                let slab = |plane: Vec4| (plane - self.origin4[k]) * self.inv_direction4[k];
+                (slab(planes[side][half]), slab(planes[side ^ 1][half]))
+            });
+            if self.parallel.any() {
+                // As in `enter_box`, for four boxes at once.
+                for (k, (near, far)) in slabs.iter_mut().enumerate() {
+                    if self.parallel.test(k) {
+                        let [min, max] = node.planes[k].map(|p| p[half]);
+                        let inside = min.cmple(self.origin4[k]) & self.origin4[k].cmple(max);
+                        *near = Vec4::select(inside, Vec4::NEG_INFINITY, Vec4::INFINITY);
+                        *far = -*near;
+                    }
                 }
             }
+            let near = slabs.iter().fold(Vec4::ZERO, |t, (near, _)| t.max(*near));
+            let far = slabs.iter().fold(Vec4::INFINITY, |t, (_, far)| t.min(*far));
+            hits |= near.cmple((far * BINARY_SCALE).min(t_cull)).bitmask() << (4 * half);
+            entry[half] = near;
         }
-        hit_mask
+        let [a, b] = entry.map(|v| v.to_array());
+        (hits, [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]])
     }
 }

@@ -1,12 +1,13 @@
-//! Stack traversal of obvhs' two BVH layouts with the conservative box tests
-//! of [`node_test`](super::node_test). One loop per layout serves both
-//! closest-hit and any-hit queries: the visitor sees each candidate primitive
-//! slot, may lower the culling distance, and may stop the walk.
+//! Stack traversal of the two BVH layouts (obvhs' BVH2, our [`WideBvh`]) with
+//! the conservative box tests of [`node_test`](super::node_test). One loop
+//! per layout serves both closest-hit and any-hit queries: the visitor sees
+//! each candidate primitive slot, may lower the culling distance, and may stop
+//! the walk.
 
-use glam::UVec2;
-use obvhs::{bvh2::Bvh2, cwbvh::CwBvh, fast_stack, faststack::FastStack};
+use obvhs::{bvh2::Bvh2, fast_stack, faststack::FastStack};
 
-use super::node_test::TraversalRay;
+use super::node_test::{TraversalRay, BINARY_SCALE};
+use super::wide::{ChildRef, WideBvh};
 
 /// Called with a primitive slot (an index into the BVH's
 /// `primitive_indices`) and the culling distance, which it may lower;
@@ -60,25 +61,136 @@ pub fn traverse_binary(bvh: &Bvh2, ray: &TraversalRay, mut t_cull: f32, mut visi
     });
 }
 
-/// Walks a compressed wide BVH in obvhs' ordered traversal, testing child
-/// boxes conservatively.
-pub fn traverse_wide(bvh: &CwBvh, ray: &TraversalRay, mut t_cull: f32, mut visit: impl Visit) {
+/// In which order [`traverse_wide`] visits the children a ray meets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Order {
+    /// By entry `t`: what a closest-hit query needs to lower `t_cull` early.
+    Nearest,
+    /// By obvhs' octant slots, unsorted: nearly front to back, and cheaper
+    /// for any-hit queries, which stop at the first hit anyway.
+    Octant,
+}
+
+/// Walks a wide BVH in `order`. The children a node's test lets through go
+/// onto the stack with their entry `t`, and are skipped when popped beyond a
+/// `t_cull` lowered meanwhile.
+pub fn traverse_wide(
+    bvh: &WideBvh,
+    ray: &TraversalRay,
+    order: Order,
+    t_cull: f32,
+    visit: impl Visit,
+) {
     if bvh.nodes.is_empty() {
         return;
     }
-    let mut state = bvh.new_traversal(ray.direction);
-    let mut node;
-    'walk: {
-        obvhs::traverse!(
+    // Each node visited pops one entry and pushes at most eight, so the stack
+    // never holds more than seven per level plus one. Kept on the call stack
+    // for the usual depths; zeroing it is part of every ray's cost.
+    match 7 * bvh.depth + 1 {
+        n if n <= 64 => walk_wide(bvh, ray, order, t_cull, visit, &mut [Entry::default(); 64]),
+        n if n <= 128 => walk_wide(bvh, ray, order, t_cull, visit, &mut [Entry::default(); 128]),
+        n => walk_wide(
             bvh,
-            node,
-            state,
-            ray.wide_child_mask(node, state.oct_inv4, t_cull),
-            {
-                if !visit(state.primitive_id as usize, &mut t_cull) {
-                    break 'walk;
-                }
-            }
-        );
+            ray,
+            order,
+            t_cull,
+            visit,
+            &mut vec![Entry::default(); n],
+        ),
     }
+}
+
+fn walk_wide(
+    bvh: &WideBvh,
+    ray: &TraversalRay,
+    order: Order,
+    mut t_cull: f32,
+    mut visit: impl Visit,
+    stack: &mut [Entry],
+) {
+    stack[0] = Entry::default();
+    let mut len = 1;
+    while len > 0 {
+        len -= 1;
+        let Entry { child, t } = stack[len];
+        if t > t_cull * BINARY_SCALE {
+            continue;
+        }
+        if child.prim_count > 0 {
+            let slots = child.index..child.index + child.prim_count;
+            if !slots
+                .into_iter()
+                .all(|slot| visit(slot as usize, &mut t_cull))
+            {
+                return;
+            }
+            continue;
+        }
+        let node = &bvh.nodes[child.index as usize];
+        let (hits, entry) = ray.enter_children(node, t_cull);
+        let first = len;
+        // Children go on in descending rank, so the lowest rank is popped
+        // first. Ranked `slot ^ octant`, they come front to back, as obvhs
+        // placed them in their slots for the ray's octant; ranked by slot,
+        // they are sorted by entry `t` afterwards.
+        let flip = if order == Order::Octant {
+            ray.octant
+        } else {
+            0
+        };
+        let mut ranks = flip_slots(hits, flip);
+        while ranks != 0 {
+            let rank = 31 - ranks.leading_zeros();
+            ranks &= !(1 << rank);
+            let slot = (rank ^ flip) as usize;
+            let child = ChildRef {
+                index: node.child[slot],
+                prim_count: u32::from(node.prim_count[slot]),
+            };
+            stack[len] = Entry {
+                child,
+                t: entry[slot],
+            };
+            len += 1;
+        }
+        if order == Order::Nearest {
+            sort_far_to_near(&mut stack[first..len]);
+        }
+    }
+}
+
+/// Moves bit `i` of an eight-bit mask to bit `i ^ flip`.
+#[inline(always)]
+fn flip_slots(mut mask: u32, flip: u32) -> u32 {
+    if flip & 1 != 0 {
+        mask = (mask & 0x55) << 1 | (mask >> 1) & 0x55;
+    }
+    if flip & 2 != 0 {
+        mask = (mask & 0x33) << 2 | (mask >> 2) & 0x33;
+    }
+    if flip & 4 != 0 {
+        mask = (mask & 0x0f) << 4 | (mask >> 4) & 0x0f;
+    }
+    mask
+}
+
+/// Orders a node's pushed children so the nearest is popped first; rarely
+/// more than two or three.
+#[inline(always)]
+fn sort_far_to_near(pushed: &mut [Entry]) {
+    for i in 1..pushed.len() {
+        let mut at = i;
+        while at > 0 && pushed[at - 1].t < pushed[at].t {
+            pushed.swap(at - 1, at);
+            at -= 1;
+        }
+    }
+}
+
+/// A child waiting on the stack of [`walk_wide`], with its entry `t`.
+#[derive(Clone, Copy, Debug, Default)]
+struct Entry {
+    child: ChildRef,
+    t: f32,
 }

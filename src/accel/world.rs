@@ -257,6 +257,9 @@ impl TopLevel {
     /// Calls `visit` with the index of each instance whose bounds the ray
     /// meets before `t_cull`, as [`traverse_binary`] does.
     fn visit(&self, ray: &Ray, t_cull: f32, mut visit: impl FnMut(usize, &mut f32) -> bool) {
+        if self.members.is_empty() {
+            return;
+        }
         let traversal = TraversalRay::new(ray.origin, ray.direction);
         traverse_binary(&self.bvh, &traversal, t_cull, |slot, t_cull| {
             visit(
