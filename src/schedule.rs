@@ -1,10 +1,14 @@
 //! Which frames to render and when they happen. [`FrameSet`] turns the
 //! CLI's RANGE argument into a sorted list of frame numbers; [`Timeline`]
 //! maps a frame to its time in seconds, which the pose of the scene is
-//! sampled at. (The per-frame scheduler that compares poses lands here too.)
+//! sampled at; [`FrameDelta`] says what changed from one rendered frame to
+//! the next, which decides what a frame must recompute.
 
 use std::fmt;
 use std::str::FromStr;
+
+use crate::render::frame::FrameScene;
+use crate::render::light::{LightSource, RenderLight};
 
 /// The most frames one set may hold: beyond it a typo (`1-1000000000`) is
 /// far likelier than a real shot, and the list would take gigabytes.
@@ -189,6 +193,83 @@ impl Timeline {
     /// The time in seconds at which `frame` samples the animation.
     pub fn time_of(&self, frame: u32) -> f64 {
         f64::from(frame) / self.fps
+    }
+}
+
+/// What changed between two consecutive rendered frames. It decides the
+/// work of the next one: moved objects update the world's top level,
+/// deformed ones refit their own structure, moved objects and lights
+/// invalidate light-mesh bits, and a frame where nothing changed is copied.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct FrameDelta {
+    pub camera_moved: bool,
+    /// Lights (indices into `FrameScene::lights`) whose position or
+    /// direction changed: their mask bits are stale.
+    pub lights_moved: Vec<usize>,
+    /// Some light changed colour, intensity, range or cone: the image
+    /// changes, no mask bit does.
+    pub lights_changed: bool,
+    /// Objects (indices into `FrameScene::objects`) moved rigidly.
+    pub objects_moved: Vec<usize>,
+    /// Objects whose mesh deformed (skins, morph targets).
+    pub objects_deformed: Vec<usize>,
+}
+
+impl FrameDelta {
+    /// The first frame of a run: everything is new.
+    pub fn first(frame: &FrameScene) -> FrameDelta {
+        let dynamic = |(index, object): (usize, &crate::render::frame::PlacedObject)| {
+            object.dynamic.then_some(index)
+        };
+        FrameDelta {
+            camera_moved: true,
+            lights_moved: (0..frame.lights.len()).collect(),
+            lights_changed: true,
+            objects_moved: frame
+                .objects
+                .iter()
+                .enumerate()
+                .filter_map(dynamic)
+                .collect(),
+            objects_deformed: (0..frame.objects.len())
+                .filter(|&i| frame.deformed[i].is_some())
+                .collect(),
+        }
+    }
+
+    /// What changed from `before` to `after` (two placements of the same
+    /// scene with the same anchor).
+    pub fn between(before: &FrameScene, after: &FrameScene) -> FrameDelta {
+        let moved_light = |(index, (a, b)): (usize, (&RenderLight, &RenderLight))| {
+            let moved = match (a.source, b.source) {
+                (
+                    LightSource::Directional { towards: x },
+                    LightSource::Directional { towards: y },
+                ) => x != y,
+                _ => a.position() != b.position(),
+            };
+            moved.then_some(index)
+        };
+        let pairs = || before.lights.iter().zip(&after.lights).enumerate();
+        FrameDelta {
+            camera_moved: before.camera != after.camera,
+            lights_moved: pairs().filter_map(moved_light).collect(),
+            lights_changed: pairs().any(|(_, (a, b))| a != b),
+            objects_moved: (0..after.objects.len())
+                .filter(|&i| before.objects[i].to_render != after.objects[i].to_render)
+                .collect(),
+            objects_deformed: (0..after.objects.len())
+                .filter(|&i| before.deformed[i] != after.deformed[i])
+                .collect(),
+        }
+    }
+
+    /// Nothing that the image depends on changed: the frame is a copy.
+    pub fn is_still(&self) -> bool {
+        !self.camera_moved
+            && !self.lights_changed
+            && self.objects_moved.is_empty()
+            && self.objects_deformed.is_empty()
     }
 }
 

@@ -7,9 +7,11 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::accel::{World, WorldObject};
+use crate::anim::pose::ClipSelection;
 use crate::backend::cpu::{BackendError, CpuBackend, Shading};
 use crate::import::{self, ImportError};
 use crate::lightmesh::interpolate::Variant;
+use crate::lightmesh::invalidate::ChangedRegion;
 use crate::lightmesh::lattice::Lattice;
 use crate::lightmesh::{spacing, LightMesh, LightMeshError};
 use crate::output::{self, FramePattern, OutputError};
@@ -17,7 +19,7 @@ use crate::render::frame::{CameraChoice, FrameScene, PlaceError, SceneBounds};
 use crate::render::FrameJob;
 use crate::scene::pose::Pose;
 use crate::scene::SceneDesc;
-use crate::schedule::FrameSet;
+use crate::schedule::{FrameDelta, FrameSet, Timeline};
 use crate::settings::{Method, Settings};
 use crate::stats::{FrameStats, RunStats};
 
@@ -83,6 +85,14 @@ pub struct Sequence {
     /// The light mesh, made on the first LMM frame and kept so that later
     /// frames reuse its masks.
     light_mesh: Option<LightMesh>,
+    /// Which animation clips play.
+    clips: ClipSelection,
+    /// The previous frame's placement, to tell what changed.
+    previous: Option<FrameScene>,
+    /// The previous frame's image, and whether the frame now placed is the
+    /// same picture (nothing changed), so it is copied.
+    last_image: Option<output::Image>,
+    still: bool,
 }
 
 impl Sequence {
@@ -119,6 +129,10 @@ impl Sequence {
             anchor,
             scene_radius,
             light_mesh: None,
+            clips: ClipSelection::All,
+            previous: None,
+            last_image: None,
+            still: false,
         })
     }
 
@@ -126,23 +140,91 @@ impl Sequence {
         &self.scene
     }
 
-    /// Poses the scene for `frame` and places it in render space.
-    pub fn place(&self, settings: &Settings) -> Result<FrameScene, RunError> {
+    /// The light mesh, once an LMM frame has made it.
+    pub fn light_mesh(&self) -> Option<&LightMesh> {
+        self.light_mesh.as_ref()
+    }
+
+    /// The frame at time 0, for single stills.
+    pub fn place(&mut self, settings: &Settings) -> Result<FrameScene, RunError> {
+        self.advance(0.0, settings, &mut FrameStats::default())
+    }
+
+    /// Poses the scene at `time` seconds and places it in render space, then
+    /// brings the world and the light mesh up to date with what changed
+    /// since the previous frame: moved dynamic objects get new instance
+    /// transforms, deformed ones new positions, and the light mesh drops
+    /// the bits their old and new bounds (and moved lights) can affect.
+    /// `stats` gets the change summary and the invalidation's cost.
+    pub fn advance(
+        &mut self,
+        time: f64,
+        settings: &Settings,
+        stats: &mut FrameStats,
+    ) -> Result<FrameScene, RunError> {
         let camera = match &settings.camera {
             Some(name) => CameraChoice::Named(name),
             None => CameraChoice::First,
         };
-        FrameScene::place(
-            &self.scene,
-            &Pose::rest(&self.scene),
-            self.anchor,
-            camera,
-            &settings.lamps,
-        )
-        .map_err(|source| RunError::Place {
-            file: self.scene_file.clone(),
-            source,
-        })
+        let pose = Pose::at(&self.scene, self.clips, time);
+        let placed = FrameScene::place(&self.scene, &pose, self.anchor, camera, &settings.lamps)
+            .map_err(|source| RunError::Place {
+                file: self.scene_file.clone(),
+                source,
+            })?;
+        let delta = match &self.previous {
+            Some(previous) => FrameDelta::between(previous, &placed),
+            None => FrameDelta::first(&placed),
+        };
+
+        let started = Instant::now();
+        let mut changed: Vec<usize> = delta
+            .objects_moved
+            .iter()
+            .chain(&delta.objects_deformed)
+            .copied()
+            .collect();
+        changed.sort_unstable();
+        changed.dedup();
+        let mut regions = Vec::new();
+        for object in changed {
+            let before = self.world.object_bounds(object);
+            let update = match &placed.deformed[object] {
+                Some(mesh) if delta.objects_deformed.contains(&object) => {
+                    self.world.set_positions(object, &mesh.positions)
+                }
+                _ => Ok(()),
+            }
+            .and_then(|()| {
+                self.world
+                    .set_transform(object, placed.objects[object].to_render)
+            });
+            // Static objects never move; an update refused for one means the
+            // scene model and the world disagree, which only a bug can cause.
+            debug_assert!(
+                update.is_ok(),
+                "world update of object {object}: {update:?}"
+            );
+            regions.extend(
+                before
+                    .into_iter()
+                    .chain(self.world.object_bounds(object))
+                    .map(|b| ChangedRegion {
+                        min: b.min,
+                        max: b.max,
+                    }),
+            );
+        }
+        if let Some(mesh) = &mut self.light_mesh {
+            stats.bits_invalidated = mesh.invalidate(&regions, &delta.lights_moved, &placed.lights);
+        }
+        stats.invalidate_seconds = started.elapsed().as_secs_f64();
+        stats.camera_moved = delta.camera_moved;
+        stats.lights_moved = delta.lights_moved.len() as u64;
+        stats.objects_moved = (delta.objects_moved.len() + delta.objects_deformed.len()) as u64;
+        self.still = self.previous.is_some() && delta.is_still();
+        self.previous = Some(placed.clone());
+        Ok(placed)
     }
 
     /// Renders one frame into an image, filling `stats`.
@@ -153,6 +235,10 @@ impl Sequence {
         settings: &Settings,
         stats: &mut FrameStats,
     ) -> Result<output::Image, RunError> {
+        if let (true, Some(image)) = (self.still, &self.last_image) {
+            stats.copied = true;
+            return Ok(image.clone());
+        }
         if matches!(settings.method, Method::Lmm | Method::Lmm1) {
             self.prepare_light_mesh(placed, settings)?;
         }
@@ -177,12 +263,14 @@ impl Sequence {
             spp: settings.spp,
             max_depth: settings.max_depth,
         };
-        backend
+        let image = backend
             .render(&job, &mut shading, stats)
             .map_err(|source| RunError::LightMesh {
                 file: self.scene_file.clone(),
                 source,
-            })
+            })?;
+        self.last_image = Some(image.clone());
+        Ok(image)
     }
 
     /// The sequence's light mesh, made on first use with `h` from the
@@ -248,13 +336,14 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
         method: settings.method.to_string(),
         ..RunStats::default()
     };
+    let timeline = Timeline { fps: settings.fps };
     for (index, &frame) in job.frames.frames().iter().enumerate() {
         let frame_started = Instant::now();
         let mut stats = FrameStats {
             frame,
             ..FrameStats::default()
         };
-        let placed = sequence.place(settings)?;
+        let placed = sequence.advance(timeline.time_of(frame), settings, &mut stats)?;
         let image = sequence.render(&backend, &placed, settings, &mut stats)?;
 
         let write_started = Instant::now();

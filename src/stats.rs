@@ -32,6 +32,15 @@ pub struct FrameStats {
     pub stages: BTreeMap<String, f64>,
     pub rays: RayCounts,
     pub shading_points: u64,
+    /// What changed since the previous rendered frame.
+    pub camera_moved: bool,
+    pub lights_moved: u64,
+    pub objects_moved: u64,
+    /// Nothing changed: the previous frame's image was written again.
+    pub copied: bool,
+    /// Light-mesh bits dropped because geometry or lights moved.
+    pub bits_invalidated: u64,
+    pub invalidate_seconds: f64,
     /// Light-mesh work, for the LMM and LMM1 methods.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lightmesh: Option<LightMeshStats>,

@@ -244,6 +244,23 @@ impl MaskStore {
         BRICK_NODES * GROUPS * lights.div_ceil(64).max(1) * std::mem::size_of::<u64>()
     }
 
+    /// (node, light) pairs whose static bit is known: every pair the fill
+    /// stage ever computed and no moved light has dropped since.
+    pub fn static_bits(&self) -> u64 {
+        let stride = GROUPS * self.words;
+        let valid = STATIC_VALID * self.words..(STATIC_VALID + 1) * self.words;
+        self.bricks
+            .values()
+            .flat_map(|bits| bits.chunks(stride))
+            .map(|node| {
+                node[valid.clone()]
+                    .iter()
+                    .map(|w| w.count_ones() as u64)
+                    .sum::<u64>()
+            })
+            .sum()
+    }
+
     /// Nodes with at least one valid bit.
     pub fn nodes_cached(&self) -> usize {
         self.nodes

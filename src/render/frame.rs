@@ -4,10 +4,13 @@
 //! and only then rounded to `f32`, so a city modelled 100 km from the origin
 //! renders exactly like the same city at the origin.
 
+use std::sync::Arc;
+
 use glam::{Affine3A, DMat4, DVec3, Mat3, Vec3};
 
 use super::camera::RenderCamera;
 use super::light::RenderLight;
+use crate::anim::deform::{deformed_mesh, DeformedMesh};
 use crate::scene::pose::{dynamic_nodes, Pose};
 use crate::scene::{Light, Projection, SceneDesc};
 use crate::settings::LampSettings;
@@ -32,6 +35,9 @@ pub struct FrameScene {
     pub camera: RenderCamera,
     /// True when the scene has no camera and one was made to frame it.
     pub automatic_camera: bool,
+    /// Per object, its mesh as the pose deforms it (skins, morph targets),
+    /// in object space; None for objects that do not deform.
+    pub deformed: Vec<Option<Arc<DeformedMesh>>>,
 }
 
 /// World-space bounds of all meshes at a pose, in `f64`.
@@ -93,7 +99,7 @@ impl FrameScene {
     ) -> Result<FrameScene, PlaceError> {
         let dynamic = dynamic_nodes(scene);
         let relative = DMat4::from_translation(-anchor);
-        let objects = scene
+        let objects: Vec<PlacedObject> = scene
             .nodes
             .iter()
             .enumerate()
@@ -127,12 +133,22 @@ impl FrameScene {
             Some(camera) => (camera, false),
             None => (framing_camera(scene, pose, anchor)?, true),
         };
+        let deformed = objects
+            .iter()
+            .map(|object: &PlacedObject| {
+                scene.nodes[object.node]
+                    .deforms
+                    .then(|| deformed_mesh(scene, pose, object.node).map(Arc::new))
+                    .flatten()
+            })
+            .collect();
         Ok(FrameScene {
             anchor,
             objects,
             lights,
             camera,
             automatic_camera,
+            deformed,
         })
     }
 }

@@ -53,7 +53,10 @@ impl ShadingPoint {
         // The position comes from the barycentrics on the transformed
         // triangle, not from origin + t·direction: it lies on the surface to
         // within rounding, which the origin offsets are designed for.
-        let corner = |i: usize| object.to_render.transform_point3(mesh.positions[i]);
+        let deformed = frame.deformed[hit.object as usize].as_deref();
+        let positions = deformed.map_or(&mesh.positions, |d| &d.positions);
+        let normals = deformed.map_or(&mesh.normals, |d| &d.normals);
+        let corner = |i: usize| object.to_render.transform_point3(positions[i]);
         let position = w * corner(a) + u * corner(b) + v * corner(c);
 
         let towards_viewer = -ray.direction.normalize();
@@ -63,12 +66,7 @@ impl ShadingPoint {
         } else {
             -hit.geometric_normal
         };
-        let shading_normal = match mesh
-            .normals
-            .get(a)
-            .zip(mesh.normals.get(b))
-            .zip(mesh.normals.get(c))
-        {
+        let shading_normal = match normals.get(a).zip(normals.get(b)).zip(normals.get(c)) {
             Some(((na, nb), nc)) => {
                 let n =
                     (object.normal_to_render * (w * *na + u * *nb + v * *nc)).normalize_or_zero();

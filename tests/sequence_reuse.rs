@@ -1,0 +1,202 @@
+//! Frames rendered in a sequence, reusing the light mesh's masks, equal the
+//! same frames rendered cold, bit for bit — with a truck passing between a
+//! lamp and a facade more than 15 m from it, a moving light and a moving
+//! camera. Camera-only animation recomputes no bit; a still sequence copies
+//! its frames.
+
+mod common;
+
+use common::*;
+use glam::{DMat4, DVec3, Vec3};
+use lmanim::backend::CpuBackend;
+use lmanim::output::Image;
+use lmanim::scene::animation::{AnimationClip, Channel, Interpolation, Sampler, Target};
+use lmanim::scene::{LightKind, Projection, SceneDesc};
+use lmanim::sequence::Sequence;
+use lmanim::settings::{Method, Settings};
+use lmanim::stats::FrameStats;
+
+const TIMES: [f64; 4] = [0.0, 1.0, 2.0, 3.0];
+
+fn linear_translation(node: usize, from: Vec3, to: Vec3) -> Channel {
+    Channel {
+        target: Target::Translation(node),
+        sampler: Sampler {
+            interpolation: Interpolation::Linear,
+            times: vec![0.0, 3.0],
+            values: vec![from.x, from.y, from.z, to.x, to.y, to.z],
+            width: 3,
+        },
+    }
+}
+
+/// A street with a facade at x = 30, a lamp at the origin, a second lamp
+/// and a camera looking at the facade; what moves is up to `animate`.
+fn street(truck_moves: bool, light_moves: bool, camera_moves: bool) -> SceneDesc {
+    let mut scene = empty_scene();
+    let m = add_material(&mut scene, lambert(Vec3::splat(0.6)));
+    let facade = [
+        Vec3::new(30.0, 0.0, -10.0),
+        Vec3::new(30.0, 0.0, 10.0),
+        Vec3::new(30.0, 12.0, 10.0),
+        Vec3::new(30.0, 12.0, -10.0),
+    ];
+    add_quads(&mut scene, &[floor_quad(0.0, 40.0), facade], 8, m);
+    // A truck 2 × 3.5 × 2 m: a 2 m box standing on its node, stretched.
+    let truck = add_quads(&mut scene, &box_quads(Vec3::Y, 1.0), 1, m);
+    scene.nodes[truck].local = DMat4::from_scale(DVec3::new(1.0, 1.75, 1.0));
+    add_light(
+        &mut scene,
+        LightKind::Point,
+        400.0,
+        DMat4::from_translation(DVec3::new(0.0, 5.0, 0.0)),
+    );
+    let second = add_light(
+        &mut scene,
+        LightKind::Point,
+        200.0,
+        DMat4::from_translation(DVec3::new(25.0, 6.0, 9.0)),
+    );
+    let camera = add_camera(
+        &mut scene,
+        Projection::Perspective {
+            yfov: 0.9,
+            aspect_ratio: None,
+            znear: 0.1,
+            zfar: None,
+        },
+        look_at(DVec3::new(18.0, 4.0, 14.0), DVec3::new(30.0, 2.0, 0.0)),
+    );
+    for light in &mut scene.lights {
+        light.radius = Some(0.3);
+    }
+    let mut channels = Vec::new();
+    if truck_moves {
+        channels.push(linear_translation(
+            truck,
+            Vec3::new(-30.0, 0.0, 0.0),
+            Vec3::new(11.0, 0.0, 0.0),
+        ));
+        scene.nodes[truck].animated = true;
+    }
+    if light_moves {
+        channels.push(linear_translation(
+            second,
+            Vec3::new(25.0, 6.0, 9.0),
+            Vec3::new(22.0, 6.0, -6.0),
+        ));
+        scene.nodes[second].animated = true;
+    }
+    if camera_moves {
+        channels.push(linear_translation(
+            camera,
+            Vec3::new(18.0, 4.0, 14.0),
+            Vec3::new(14.0, 5.0, 10.0),
+        ));
+        scene.nodes[camera].animated = true;
+    }
+    if !channels.is_empty() {
+        scene.animations.push(AnimationClip {
+            name: Some("street".into()),
+            channels,
+        });
+    }
+    scene
+}
+
+fn settings_for(method: Method) -> Settings {
+    let mut settings = settings(48, 32);
+    settings.method = method;
+    settings.lightmesh.h = Some(0.25);
+    settings
+}
+
+/// Every time rendered by one sequence, with its stats.
+fn rendered_in_sequence(scene: &SceneDesc, settings: &Settings) -> Vec<(Image, FrameStats)> {
+    let backend = CpuBackend::new(Some(2)).unwrap();
+    let mut sequence = Sequence::new(scene.clone(), "street".into()).unwrap();
+    TIMES
+        .iter()
+        .map(|&time| {
+            let mut stats = FrameStats::default();
+            let placed = sequence.advance(time, settings, &mut stats).unwrap();
+            let image = sequence
+                .render(&backend, &placed, settings, &mut stats)
+                .unwrap();
+            (image, stats)
+        })
+        .collect()
+}
+
+fn rendered_cold(scene: &SceneDesc, settings: &Settings, time: f64) -> Image {
+    let backend = CpuBackend::new(Some(2)).unwrap();
+    let mut sequence = Sequence::new(scene.clone(), "street".into()).unwrap();
+    let mut stats = FrameStats::default();
+    let placed = sequence.advance(time, settings, &mut stats).unwrap();
+    sequence
+        .render(&backend, &placed, settings, &mut stats)
+        .unwrap()
+}
+
+#[test]
+fn frames_with_reused_masks_equal_frames_rendered_cold() {
+    let scene = street(true, true, true);
+    for method in [Method::Lmm1, Method::Lmm] {
+        let settings = settings_for(method);
+        let frames = rendered_in_sequence(&scene, &settings);
+        for (&time, (image, stats)) in TIMES.iter().zip(&frames) {
+            assert_eq!(
+                *image,
+                rendered_cold(&scene, &settings, time),
+                "{method} at t = {time}"
+            );
+            if time > 0.0 {
+                assert!(stats.objects_moved == 1 && stats.lights_moved == 1 && stats.camera_moved);
+                assert!(
+                    stats.bits_invalidated > 0,
+                    "the truck and the light drop bits at t = {time}"
+                );
+                let mesh = stats.lightmesh.unwrap();
+                assert!(mesh.bits_reused > 0, "most bits are reused at t = {time}");
+            }
+        }
+        // The truck's shadow reaches the facade by the last frame.
+        assert_ne!(frames[0].0, frames[3].0);
+    }
+}
+
+#[test]
+fn camera_only_animation_recomputes_no_bit() {
+    let scene = street(false, false, true);
+    let settings = settings_for(Method::Lmm1);
+    let backend = CpuBackend::new(Some(2)).unwrap();
+    let mut sequence = Sequence::new(scene, "street".into()).unwrap();
+    let mut computed = 0;
+    for (index, &time) in TIMES.iter().enumerate() {
+        let mut stats = FrameStats::default();
+        let placed = sequence.advance(time, &settings, &mut stats).unwrap();
+        sequence
+            .render(&backend, &placed, &settings, &mut stats)
+            .unwrap();
+        if index > 0 {
+            assert!(stats.camera_moved && stats.objects_moved == 0 && stats.lights_moved == 0);
+            assert_eq!(stats.bits_invalidated, 0);
+            assert!(!stats.copied);
+        }
+        computed += stats.lightmesh.unwrap().bits_computed;
+    }
+    // Nodes coming into view are computed once; none twice.
+    let cached = sequence.light_mesh().unwrap().masks().static_bits();
+    assert_eq!(computed, cached);
+}
+
+#[test]
+fn a_still_sequence_copies_its_frames() {
+    let frames = rendered_in_sequence(&street(false, false, false), &settings_for(Method::Lmm1));
+    assert!(!frames[0].1.copied);
+    for (image, stats) in &frames[1..] {
+        assert!(stats.copied);
+        assert_eq!(*image, frames[0].0);
+        assert_eq!(stats.shading_points, 0, "nothing was rendered");
+    }
+}
