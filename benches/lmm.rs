@@ -2,8 +2,11 @@
 //! on the generated city block for nL = 1, 4, 16, 64 street lamps at 480p
 //! and 1080p, one cold frame each, with N_LM against N_pix.
 //!
-//! `cargo bench --bench lmm` prints a Markdown table (BENCHMARKS.md keeps
-//! it). `LMANIM_BENCH_QUICK=1` runs 480p only.
+//! Then the paper's table of step-3 tests per point, on the city's walls and
+//! corners, for kI = 2.1, 2.5, 3.0.
+//!
+//! `cargo bench --bench lmm` prints Markdown tables (BENCHMARKS.md keeps
+//! them). `LMANIM_BENCH_QUICK=1` runs 480p only.
 
 use std::time::Instant;
 
@@ -65,5 +68,31 @@ fn main() {
                 );
             }
         }
+    }
+
+    println!();
+    println!("| kI | mean candidates (steps 1-2) | mean p2n tests (step 3) | mean interpolation set | paper's mean tests | half-ball volume |");
+    println!("|---|---|---|---|---|---|");
+    let path = dir.path().join("city16.glb");
+    for (ki, paper) in [(2.1f32, 16.5), (2.5, 30.4), (3.0, 53.4)] {
+        let mut settings = Settings {
+            width: 854,
+            height: 480,
+            method: Method::Lmm,
+            ..Settings::default()
+        };
+        settings.lightmesh.ki = ki;
+        let mut sequence = Sequence::load(&path).expect("city loads");
+        let placed = sequence.place(&settings).expect("camera");
+        let mut stats = FrameStats::default();
+        sequence
+            .render(&backend, &placed, &settings, &mut stats)
+            .expect("frame renders");
+        let mesh = stats.lightmesh.unwrap_or_default();
+        let volume = 2.0 / 3.0 * std::f64::consts::PI * f64::from(ki).powi(3);
+        println!(
+            "| {ki} | {:.1} | {:.1} | {:.1} | {paper} | {volume:.1} |",
+            mesh.mean_candidates, mesh.mean_p2n_tests, mesh.mean_interp_set
+        );
     }
 }

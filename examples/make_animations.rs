@@ -5,7 +5,9 @@
 //! to catch soft shadows, pillars and crates to cast them, a mirror sphere
 //! and a glass sphere for Whitted reflection and refraction, three coloured
 //! point lamps of different radii (so penumbrae of different widths) and a
-//! spot light. Its settings are in the hand-written `courtyard.ron`.
+//! spot light, with four seconds of animation: a rolling glass ball, a
+//! drifting lamp and a camera dolly. Its settings are in the hand-written
+//! `courtyard.ron`.
 
 use std::f32::consts::PI;
 use std::path::Path;
@@ -13,6 +15,7 @@ use std::path::Path;
 use anyhow::Context;
 use glam::{Quat, Vec2, Vec3, Vec4};
 use lmanim::authoring::{look_at_rotation, shapes, GltfBuilder, MeshId, NodeDesc, Primitive};
+use lmanim::scene::animation::{AnimationClip, Channel, Interpolation, Sampler, Target};
 use lmanim::scene::{Camera, Light, LightKind, Material, Projection};
 
 fn main() -> anyhow::Result<()> {
@@ -164,7 +167,7 @@ fn courtyard() -> anyhow::Result<GltfBuilder> {
         Vec3::splat(0.7),
         0.0,
     )?;
-    placed(
+    let glass_ball_node = placed(
         "GlassBall",
         glass_ball,
         Vec3::new(1.2, 0.45, 0.9),
@@ -197,13 +200,14 @@ fn courtyard() -> anyhow::Result<GltfBuilder> {
             Vec3::new(0.3, 1.3, 2.2),
         ),
     ];
+    let mut lamp_nodes = Vec::new();
     for (name, colour, intensity, radius, at) in lamps {
         let light = b.add_light(&point_lamp(name, colour, intensity, radius))?;
-        b.add_node(NodeDesc {
+        lamp_nodes.push(b.add_node(NodeDesc {
             translation: at,
             light: Some(light),
             ..NodeDesc::named(name)
-        })?;
+        })?);
     }
     let spot_at = Vec3::new(1.5, 5.0, 3.5);
     let spot = b.add_light(&Light {
@@ -235,12 +239,44 @@ fn courtyard() -> anyhow::Result<GltfBuilder> {
         },
     })?;
     let eye = Vec3::new(0.8, 2.4, 7.8);
-    b.add_node(NodeDesc {
+    let camera_node = b.add_node(NodeDesc {
         translation: eye,
         rotation: look_at_rotation(eye, Vec3::new(0.0, 0.8, -1.0), Vec3::Y)
             .context("camera aim")?,
         camera: Some(camera),
         ..NodeDesc::named("main")
+    })?;
+
+    // Four seconds of animation: the glass ball rolls towards the crates
+    // (a dynamic object, so its shadow's mask bits are invalidated), the
+    // small lamp drifts across the courtyard (a moving light) and the
+    // camera dollies in (which invalidates nothing).
+    let path = |node: lmanim::authoring::NodeId, keys: &[Vec3]| Channel {
+        target: Target::Translation(node.index()),
+        sampler: Sampler {
+            interpolation: Interpolation::Linear,
+            times: (0..keys.len()).map(|i| 4.0 * i as f32 / (keys.len() - 1) as f32).collect(),
+            values: keys.iter().flat_map(|key| key.to_array()).collect(),
+            width: 3,
+        },
+    };
+    b.add_animation(&AnimationClip {
+        name: Some("Courtyard".into()),
+        channels: vec![
+            path(
+                glass_ball_node,
+                &[
+                    Vec3::new(1.2, 0.45, 0.9),
+                    Vec3::new(0.3, 0.45, 1.3),
+                    Vec3::new(-0.5, 0.45, 1.6),
+                ],
+            ),
+            path(
+                lamp_nodes[2],
+                &[Vec3::new(0.3, 1.3, 2.2), Vec3::new(-1.2, 1.5, 2.4)],
+            ),
+            path(camera_node, &[eye, eye + Vec3::new(-0.6, -0.2, -1.2)]),
+        ],
     })?;
     Ok(b)
 }
