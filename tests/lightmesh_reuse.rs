@@ -277,3 +277,44 @@ fn camera_and_colour_changes_invalidate_nothing() {
     reused.fill(&demand, &lights, &world, &mut refill).unwrap();
     assert_eq!(refill.bits_computed, 0);
 }
+
+/// Bits settled a brick at a time by shafts equal the bits single segments
+/// give, in both layers, around a truck that shadows part of the facade.
+#[test]
+fn shaft_settled_bits_equal_single_segments() {
+    let street = Street::new();
+    let world = street.world(truck_at(11.0));
+    let lights = vec![
+        lamp(Vec3::new(0.0, 5.0, 0.0)),
+        lamp(Vec3::new(27.0, 5.0, 8.0)),
+    ];
+    let lattice = Lattice::new(H);
+    let demand = facade_demand(&lattice, lights.len());
+    let mut filled = mesh(lights.len());
+    let mut stats = LightMeshStats::default();
+    filled.fill(&demand, &lights, &world, &mut stats).unwrap();
+    let mut blocked = 0;
+    for brick in &demand.bricks {
+        for slot in 0..BRICK_NODES {
+            let node = join(brick.brick, slot);
+            let x = lattice.node_position(node);
+            for (index, light) in lights.iter().enumerate() {
+                let expected = !world.occluded(&light.shadow_ray(x));
+                blocked += !expected as u32;
+                assert_eq!(
+                    filled.masks().get(node, index),
+                    Some(expected),
+                    "node {node}, light {index}"
+                );
+            }
+        }
+    }
+    assert!(blocked > 50, "the truck and the facade block some segments");
+    assert!(stats.fill_shafts > 0);
+    assert!(
+        stats.fill_segments < stats.bits_computed / 2,
+        "shafts settled most bits: {} segments for {} bits",
+        stats.fill_segments,
+        stats.bits_computed
+    );
+}

@@ -16,6 +16,7 @@ use obvhs::{
 };
 
 use super::node_test::TraversalRay;
+use super::shaft::Shaft;
 use super::traverse::{traverse_binary, traverse_wide, Order};
 use super::triangle::WatertightRay;
 use super::wide::WideBvh;
@@ -188,6 +189,19 @@ impl MeshBvh {
             !hit
         });
         hit
+    }
+
+    /// Whether no triangle may meet `shaft` (see [`Shaft`]). A binary tree
+    /// is not walked: unless it is empty it answers "may meet", which is
+    /// always safe.
+    pub fn shaft_is_empty(&self, shaft: &Shaft) -> bool {
+        match &self.tree {
+            Tree::Wide(tree) => tree.visit_boxes(
+                |min, max| shaft.may_meet_box(min.into(), max.into()),
+                |slot| !shaft.may_meet_triangle(self.vertices[slot].map(Vec3::from_array)),
+            ),
+            Tree::Binary(_) => self.is_empty(),
+        }
     }
 
     /// Visits candidate slots; `order` applies to the wide layout (the

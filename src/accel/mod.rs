@@ -17,6 +17,7 @@ pub mod mesh_bvh;
 mod node_test;
 pub mod offset;
 pub mod ray;
+pub mod shaft;
 mod traverse;
 pub mod triangle;
 mod wide;

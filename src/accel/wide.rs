@@ -86,6 +86,44 @@ impl WideBvh {
     }
 }
 
+impl WideBvh {
+    /// Visits the primitive slots of every leaf whose box, and whose
+    /// ancestors' boxes, `may_meet` accepts; stops as soon as `visit`
+    /// returns false, and then returns false.
+    pub fn visit_boxes(
+        &self,
+        may_meet: impl Fn(Vec3A, Vec3A) -> bool,
+        mut visit: impl FnMut(usize) -> bool,
+    ) -> bool {
+        if self.nodes.is_empty() {
+            return true;
+        }
+        let mut stack = vec![0u32];
+        while let Some(index) = stack.pop() {
+            let node = &self.nodes[index as usize];
+            for slot in 0..8 {
+                let (half, lane) = (slot / 4, slot % 4);
+                let [min, max] = [0, 1].map(|side| {
+                    Vec3A::from_array([0, 1, 2].map(|k| node.planes[k][side][half][lane]))
+                });
+                if min.cmpgt(max).any() || !may_meet(min, max) {
+                    continue;
+                }
+                let child = node.child[slot];
+                match node.prim_count[slot] {
+                    0 => stack.push(child),
+                    count => {
+                        if !(child..child + u32::from(count)).all(|s| visit(s as usize)) {
+                            return false;
+                        }
+                    }
+                }
+            }
+        }
+        true
+    }
+}
+
 /// The union of a node's child boxes.
 fn node_bounds(node: &WideNode) -> Aabb {
     let axis = |side: usize, fold: fn(Vec4, Vec4) -> Vec4, pick: fn(Vec4) -> f32| {

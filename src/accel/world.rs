@@ -14,6 +14,7 @@ use super::bounds::Bounds;
 use super::instance::Instance;
 use super::mesh_bvh::{BuildTriangle, MeshBvh, MeshHit, TriangleRef};
 use super::node_test::TraversalRay;
+use super::shaft::Shaft;
 use super::traverse::traverse_binary;
 use super::{Ray, BUILD_PARAMS, STATIC_LAYOUT};
 
@@ -133,6 +134,24 @@ impl World {
             triangle: h.source.triangle,
             barycentric: h.barycentric,
             geometric_normal: h.normal,
+        })
+    }
+
+    /// Whether no static triangle may meet `shaft`; false when unsure.
+    pub fn shaft_is_clear_static(&self, shaft: &Shaft) -> bool {
+        self.static_bvh.shaft_is_empty(shaft)
+    }
+
+    /// Whether the world has any dynamic object at all.
+    pub fn has_dynamic(&self) -> bool {
+        !self.instances.is_empty()
+    }
+
+    /// Whether no dynamic object's bounds may meet `shaft`.
+    pub fn shaft_is_clear_dynamic(&self, shaft: &Shaft) -> bool {
+        self.instances.iter().all(|instance| {
+            let bounds = instance.render_bounds();
+            !shaft.may_meet_box(bounds.min, bounds.max)
         })
     }
 

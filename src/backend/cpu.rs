@@ -158,7 +158,7 @@ fn render_band(
     stats.add_stage_time("secondary", start.elapsed().as_secs_f64());
 
     let lights = &job.frame.lights;
-    let bits_before = lightmesh.bits_computed;
+    let segments_before = lightmesh.fill_segments;
     let shaded: Vec<(Vec3, PointCounts)> = match shading {
         Shading::Whitted => shade_stage(
             &points,
@@ -216,7 +216,7 @@ fn render_band(
     // Every occlusion segment is a shadow ray: formula (1)'s, the fill's
     // node-to-light ones and LMM's point-to-node tests.
     stats.rays.shadow +=
-        band_counts.shadow_rays + band_counts.p2n_tests + lightmesh.bits_computed - bits_before;
+        band_counts.shadow_rays + band_counts.p2n_tests + lightmesh.fill_segments - segments_before;
     *counts += band_counts;
     stats.shading_points += points.len() as u64;
 
