@@ -106,6 +106,13 @@ struct RenderArgs {
     /// Write 32-bit float EXR channels instead of half floats.
     #[arg(long)]
     exr_float: bool,
+    /// Keep the light mesh's static masks in this directory, shared by
+    /// runs of the same scene and lattice [default: cache].
+    #[arg(long, value_name = "DIR", conflicts_with = "no_cache")]
+    cache: Option<String>,
+    /// Neither read nor write the light-mesh disk cache.
+    #[arg(long)]
+    no_cache: bool,
     /// Write per-frame statistics as JSON to this file.
     #[arg(long)]
     stats: Option<PathBuf>,
@@ -281,6 +288,11 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     settings.camera = flags.camera.clone().or(settings.camera);
     settings.out = flags.out.clone().or(settings.out);
     settings.png |= flags.png;
+    if flags.no_cache {
+        settings.cache_dir = None;
+    } else if let Some(dir) = &flags.cache {
+        settings.cache_dir = Some(dir.clone());
+    }
     if flags.exr_float {
         settings.exr_precision = ExrPrecision::Float;
     }

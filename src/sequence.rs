@@ -3,13 +3,14 @@
 //! write the frame. This is the only place that knows about time; the
 //! integrators see one frame at a time.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::accel::{World, WorldObject};
 use crate::anim::pose::ClipSelection;
 use crate::backend::cpu::{BackendError, CpuBackend, Shading};
 use crate::import::{self, ImportError};
+use crate::lightmesh::cache::{static_geometry_hash, LightKey, StaticMaskCache};
 use crate::lightmesh::interpolate::Variant;
 use crate::lightmesh::invalidate::ChangedRegion;
 use crate::lightmesh::lattice::Lattice;
@@ -93,6 +94,18 @@ pub struct Sequence {
     /// same picture (nothing changed), so it is copied.
     last_image: Option<output::Image>,
     still: bool,
+    /// Content hash of the static geometry, part of the disk cache's key.
+    static_geometry: u128,
+    /// Where the light mesh's static masks are loaded from and saved to;
+    /// None (the default for sequences made in code) uses no disk cache.
+    cache_dir: Option<PathBuf>,
+    /// Bits the disk cache gave the light mesh, reported with the next
+    /// frame's stats.
+    bits_loaded: u64,
+    /// Where each light stood when the light mesh was made, and the static
+    /// bits of those positions, kept when the light moved away, to save.
+    cache_start: Vec<LightKey>,
+    cache_kept: StaticMaskCache,
 }
 
 impl Sequence {
@@ -122,6 +135,22 @@ impl Sequence {
             source,
         })?;
         let world = build_world(&scene, &placed);
+        let static_geometry = static_geometry_hash(
+            placed
+                .objects
+                .iter()
+                .enumerate()
+                .filter(|(_, object)| !object.dynamic)
+                .map(|(index, object)| {
+                    let mesh = &scene.meshes[object.mesh];
+                    (
+                        index,
+                        &mesh.positions[..],
+                        &mesh.triangles[..],
+                        object.to_render,
+                    )
+                }),
+        );
         Ok(Sequence {
             scene,
             scene_file,
@@ -133,6 +162,11 @@ impl Sequence {
             previous: None,
             last_image: None,
             still: false,
+            static_geometry,
+            cache_dir: None,
+            bits_loaded: 0,
+            cache_start: Vec::new(),
+            cache_kept: StaticMaskCache::default(),
         })
     }
 
@@ -143,6 +177,25 @@ impl Sequence {
     /// The light mesh, once an LMM frame has made it.
     pub fn light_mesh(&self) -> Option<&LightMesh> {
         self.light_mesh.as_ref()
+    }
+
+    /// Uses `dir` as the light mesh's disk cache (static masks), or none.
+    /// Takes effect when the light mesh is made, on the first LMM frame.
+    pub fn set_cache_dir(&mut self, dir: Option<PathBuf>) {
+        self.cache_dir = dir;
+    }
+
+    /// Saves the light mesh's static masks to the disk cache, merged with
+    /// what other workers saved there: for the lights where the last frame
+    /// placed them, and where they stood when the light mesh was made.
+    /// Does nothing without a cache directory or a light mesh.
+    pub fn save_cache(&self) -> Result<(), OutputError> {
+        match (&self.cache_dir, &self.light_mesh, &self.previous) {
+            (Some(dir), Some(mesh), Some(placed)) => {
+                mesh.save_static_masks(dir, self.static_geometry, &placed.lights, &self.cache_kept)
+            }
+            _ => Ok(()),
+        }
     }
 
     /// The frame at time 0, for single stills.
@@ -215,6 +268,16 @@ impl Sequence {
                     }),
             );
         }
+        if let (Some(mesh), Some(_), Some(previous)) =
+            (&self.light_mesh, &self.cache_dir, &self.previous)
+        {
+            // Bits of a light leaving its starting position are kept for
+            // the disk cache before invalidation drops them.
+            let leaving = delta.lights_moved.iter().copied().filter(|&light| {
+                self.cache_start.get(light) == Some(&LightKey::of(&previous.lights[light]))
+            });
+            mesh.keep_static_masks(&mut self.cache_kept, &previous.lights, leaving);
+        }
         if let Some(mesh) = &mut self.light_mesh {
             stats.bits_invalidated = mesh.invalidate(&regions, &delta.lights_moved, &placed.lights);
         }
@@ -269,6 +332,9 @@ impl Sequence {
                 file: self.scene_file.clone(),
                 source,
             })?;
+        if let Some(mesh_stats) = &mut stats.lightmesh {
+            mesh_stats.bits_loaded = std::mem::take(&mut self.bits_loaded);
+        }
         self.last_image = Some(image.clone());
         Ok(image)
     }
@@ -295,7 +361,13 @@ impl Sequence {
                 });
             }
             let limit = settings.lightmesh.max_memory_mib.saturating_mul(1 << 20);
-            self.light_mesh = Some(LightMesh::new(lattice, ki, placed.lights.len(), limit));
+            let mut mesh = LightMesh::new(lattice, ki, placed.lights.len(), limit);
+            if let Some(dir) = &self.cache_dir {
+                self.bits_loaded =
+                    mesh.load_static_masks(dir, self.static_geometry, &placed.lights);
+                self.cache_start = placed.lights.iter().map(LightKey::of).collect();
+            }
+            self.light_mesh = Some(mesh);
         }
         Ok(())
     }
@@ -331,6 +403,7 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
     }
     let backend = CpuBackend::new(settings.threads)?;
     let mut sequence = Sequence::load(job.scene_path)?;
+    sequence.set_cache_dir(settings.cache_dir.as_ref().map(PathBuf::from));
     let mut run = RunStats {
         threads: backend.threads(),
         method: settings.method.to_string(),
@@ -361,6 +434,14 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
             automatic_camera: placed.automatic_camera,
         });
         run.frames.push(stats);
+    }
+    // Saved once, after the last frame: static bits only grow during a run
+    // except where a light moves, and what a light leaves at its starting
+    // position was kept aside; one merge-and-write per worker keeps the
+    // lock short. A failed save costs later runs time, not this one its
+    // frames.
+    if let Err(error) = sequence.save_cache() {
+        log::warn!("{error}; the light-mesh cache was not saved");
     }
     run.total_seconds = started.elapsed().as_secs_f64();
     Ok(run)

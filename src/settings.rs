@@ -43,6 +43,10 @@ pub struct Settings {
     /// Output frame pattern (`frame.####.exr`); None derives one from the
     /// scene's name.
     pub out: Option<String>,
+    /// Directory of the light mesh's disk cache (static masks shared by
+    /// runs and workers), relative to the current directory; None turns
+    /// the cache off.
+    pub cache_dir: Option<String>,
     pub lamps: LampSettings,
     pub lightmesh: LightMeshSettings,
 }
@@ -61,6 +65,7 @@ impl Default for Settings {
             png: false,
             threads: None,
             out: None,
+            cache_dir: Some("cache".into()),
             lamps: LampSettings::default(),
             lightmesh: LightMeshSettings::default(),
         }

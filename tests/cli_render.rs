@@ -8,9 +8,12 @@ use glam::{Vec2, Vec3};
 use lmanim::authoring::{shapes, GltfBuilder, NodeDesc, Primitive};
 use lmanim::scene::{Light, LightKind, Material};
 
+/// Runs the binary outside the repository, so that its default light-mesh
+/// cache (`cache/` in the current directory) never lands in the tree.
 fn lmanim(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_lmanim"))
         .args(args)
+        .current_dir(std::env::temp_dir())
         .output()
         .expect("the binary runs")
 }

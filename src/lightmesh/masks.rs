@@ -265,6 +265,71 @@ impl MaskStore {
     pub fn nodes_cached(&self) -> usize {
         self.nodes
     }
+
+    /// One light's static-layer bits in each brick where it has a valid
+    /// one, for the disk cache.
+    pub fn static_bits_of(
+        &self,
+        light: usize,
+    ) -> impl Iterator<Item = (IVec3, BrickLightBits)> + '_ {
+        let (words, word, bit) = (self.words, light / 64, light % 64);
+        let stride = GROUPS * words;
+        self.bricks.iter().filter_map(move |(&brick, bits)| {
+            let mut out = BrickLightBits::default();
+            for (slot, node) in bits.chunks(stride).enumerate() {
+                let valid = node[STATIC_VALID * words + word] >> bit & 1;
+                let visible = node[STATIC_VISIBLE * words + word] >> bit & 1 & valid;
+                out.valid[slot / 64] |= valid << (slot % 64);
+                out.visible[slot / 64] |= visible << (slot % 64);
+            }
+            out.valid.iter().any(|&w| w != 0).then_some((brick, out))
+        })
+    }
+
+    /// Records static bits of `light` loaded from the disk cache, where the
+    /// store has none yet; returns how many became valid. The dynamic layer
+    /// is left invalid, so the fill stage still tests dynamic objects.
+    pub fn import_static(&mut self, brick: IVec3, light: usize, bits: &BrickLightBits) -> u64 {
+        let (words, word, bit) = (self.words, light / 64, 1u64 << (light % 64));
+        let stored = self
+            .bricks
+            .entry(brick)
+            .or_insert_with(|| vec![0; BRICK_NODES * GROUPS * words].into_boxed_slice());
+        let mut imported = 0;
+        for (slot, node) in stored.chunks_mut(GROUPS * words).enumerate() {
+            if bits.valid[slot / 64] >> (slot % 64) & 1 == 0
+                || node[STATIC_VALID * words + word] & bit != 0
+            {
+                continue;
+            }
+            let was_empty = node[STATIC_VALID * words..(STATIC_VALID + 1) * words]
+                .iter()
+                .all(|&valid| valid == 0);
+            let visible = bits.visible[slot / 64] >> (slot % 64) & 1 == 1;
+            let at = STATIC_VISIBLE * words + word;
+            node[at] = if visible {
+                node[at] | bit
+            } else {
+                node[at] & !bit
+            };
+            node[STATIC_VALID * words + word] |= bit;
+            self.nodes += was_empty as usize;
+            imported += 1;
+        }
+        imported
+    }
+}
+
+/// Words holding one bit per node slot of a brick.
+pub const BRICK_WORDS: usize = BRICK_NODES / 64;
+
+/// One light's static-layer bits over a brick, bit `slot % 64` of word
+/// `slot / 64` per node: the unit the disk cache stores.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BrickLightBits {
+    pub valid: [u64; BRICK_WORDS],
+    /// Set only where `valid` is.
+    pub visible: [u64; BRICK_WORDS],
 }
 
 /// Mutable access to one brick's validity bits, for invalidation.

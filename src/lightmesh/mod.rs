@@ -7,6 +7,7 @@
 //! missing ones, the only writer of the masks) and `shade` (formula (2),
 //! with or without the point-to-node tests of LMM).
 
+pub mod cache;
 pub mod demand;
 pub mod fill;
 pub mod interpolate;
@@ -59,6 +60,11 @@ pub struct LightMeshStats {
     pub bits_computed: u64,
     /// Bits this frame needed that earlier frames had computed.
     pub bits_reused: u64,
+    /// Shaft queries of the fill (each settles a group of bits at once when
+    /// nothing is in the way).
+    pub fill_shafts: u64,
+    /// Node-to-light segments the fill traced one by one.
+    pub fill_segments: u64,
     /// Nodes with any valid bit after the frame.
     pub nodes_cached: u64,
     /// Mean nodes per shading point after steps 1–2.
@@ -69,6 +75,9 @@ pub struct LightMeshStats {
     pub mean_p2n_tests: f64,
     /// Points shaded by formula (1) because their set was empty.
     pub fallback_points: u64,
+    /// Static bits imported from the disk cache this frame (only the
+    /// frame that made the light mesh loads any).
+    pub bits_loaded: u64,
 }
 
 impl LightMesh {

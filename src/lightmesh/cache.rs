@@ -1,0 +1,660 @@
+//! The disk cache of static-layer masks (DESIGN.md, "Light mesh"): the bits
+//! that say whether the segment from a node to a light misses the *static*
+//! geometry depend only on that geometry, the lattice and the light's
+//! position, so a later run (or another worker rendering another frame
+//! range) can load them instead of tracing them again. The dynamic layer
+//! is never cached.
+//!
+//! In the frame loop the sequence loads the file when it makes the light
+//! mesh (the first LMM frame), importing each current light's bits into
+//! the mask store before the first fill, and saves at the end of the run,
+//! merging with whatever another worker wrote meanwhile. What is saved are
+//! the bits for each light where the last frame placed it and where it
+//! stood when the light mesh was made (kept aside when the light first
+//! moved away): the positions a later run of the same or a later frame
+//! range starts from. Positions in between are not kept, so a light
+//! moving every frame does not grow the file by a section per frame.
+//!
+//! A file is named by a 128-bit content hash ([`CacheKey`]) of the format
+//! version, the lattice (origin and `h`, bit-exact) and the static geometry
+//! as the world's static structure is built from it, so any change to them
+//! names another file. Inside, sections are keyed by light *position* (or
+//! direction, for directional lights), not by index: lights move, and a
+//! light that comes back to a position finds its bits.
+//!
+//! Layout, all little-endian:
+//!
+//! ```text
+//! header  magic "LMMASKS\0" · version u32 · key u128 · sections u32
+//!         · body length u64 · body checksum u64 (XXH3-64 of the body)
+//! body    per section: kind u8 (0 point/spot position, 1 direction)
+//!         · 3 × f32 bits as u32 · bricks u32
+//!         · per brick: brick coordinates 3 × i32
+//!           · valid [u64; 8] · visible [u64; 8] (one bit per node slot)
+//! ```
+//!
+//! A file that fails any check (magic, version, key, length, checksum,
+//! structure) is reported with `log::warn!` and ignored: a wrong static bit
+//! would be a wrong shadow in every frame, so nothing unverified is used.
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use glam::{Affine3A, IVec3, Vec3};
+use xxhash_rust::xxh3::{xxh3_64, Xxh3};
+
+use super::lattice::{Lattice, MAX_NODE_COORDINATE};
+use super::masks::{BrickLightBits, MaskStore, BRICK_WORDS};
+use super::LightMesh;
+use crate::output::{write_atomically, OutputError};
+use crate::render::light::{LightSource, RenderLight};
+
+/// Bumped whenever the layout or the meaning of a bit changes; it is both
+/// in the header and in the key, so an old file is simply another name.
+pub const FORMAT_VERSION: u32 = 1;
+
+const MAGIC: [u8; 8] = *b"LMMASKS\0";
+const HEADER_BYTES: usize = 8 + 4 + 16 + 4 + 8 + 8;
+const BRICK_BYTES: usize = 3 * 4 + 2 * BRICK_WORDS * 8;
+/// Brick coordinates beyond this cannot come from a lattice that
+/// [`Lattice::covers`] the scene; a file holding them is not ours.
+const MAX_BRICK_COORDINATE: i32 = (MAX_NODE_COORDINATE as i32) / 8 + 1;
+/// A lock file older than this was left by a worker that died while
+/// saving (a save takes well under a second per hundred MB) and is
+/// removed; a saver that still has no lock after twice this writes anyway.
+const STALE_LOCK: Duration = Duration::from_secs(60);
+
+/// Why a cache file was not used.
+#[derive(Debug, thiserror::Error)]
+pub enum CacheError {
+    #[error("cannot read: {0}")]
+    Read(#[from] std::io::Error),
+    #[error("{0} bytes is too short for a light-mesh cache header")]
+    TooShort(usize),
+    #[error("not a light-mesh cache file (wrong magic bytes)")]
+    Magic,
+    #[error("format version {found}, this build reads {FORMAT_VERSION}")]
+    Version { found: u32 },
+    #[error("written for another scene or lattice (key {found:032x})")]
+    ForeignKey { found: u128 },
+    #[error("the body is {found} bytes, the header says {expected} (truncated?)")]
+    Length { expected: u64, found: usize },
+    #[error("the body's checksum does not match (corrupt)")]
+    Checksum,
+    #[error("malformed body: {0}")]
+    Malformed(&'static str),
+}
+
+/// Content hash naming a cache file: format version, lattice, static
+/// geometry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct CacheKey(pub u128);
+
+impl CacheKey {
+    /// The key of `geometry` (from [`static_geometry_hash`]) on `lattice`.
+    pub fn new(geometry: u128, lattice: &Lattice) -> CacheKey {
+        let mut hasher = Xxh3::new();
+        hasher.update(b"lmanim light-mesh static masks");
+        hasher.update(&FORMAT_VERSION.to_le_bytes());
+        hash_vec3(&mut hasher, lattice.origin);
+        hasher.update(&lattice.h.to_bits().to_le_bytes());
+        hasher.update(&geometry.to_le_bytes());
+        CacheKey(hasher.digest128())
+    }
+
+    /// The file for this key in `dir`.
+    pub fn path_in(&self, dir: &Path) -> PathBuf {
+        dir.join(format!("{:032x}.lmcache", self.0))
+    }
+}
+
+/// Hash of the static objects exactly as the world's static structure is
+/// built from them: per object (index, object-space positions, triangles,
+/// render-space transform), bit-exact. Hashing the world's inputs rather
+/// than transformed positions ties the key to what is traced, with no
+/// second transform that could round differently.
+pub fn static_geometry_hash<'a>(
+    objects: impl IntoIterator<Item = (usize, &'a [Vec3], &'a [[u32; 3]], Affine3A)>,
+) -> u128 {
+    let mut hasher = Xxh3::new();
+    for (index, positions, triangles, to_render) in objects {
+        hasher.update(&(index as u64).to_le_bytes());
+        hasher.update(&(positions.len() as u64).to_le_bytes());
+        for &p in positions {
+            hash_vec3(&mut hasher, p);
+        }
+        hasher.update(&(triangles.len() as u64).to_le_bytes());
+        for triangle in triangles {
+            for vertex in triangle {
+                hasher.update(&vertex.to_le_bytes());
+            }
+        }
+        for value in to_render.to_cols_array() {
+            hasher.update(&value.to_bits().to_le_bytes());
+        }
+    }
+    hasher.digest128()
+}
+
+fn hash_vec3(hasher: &mut Xxh3, v: Vec3) {
+    for value in v.to_array() {
+        hasher.update(&value.to_bits().to_le_bytes());
+    }
+}
+
+/// What a light's static bits depend on: where its shadow segments end.
+/// Point and spot lights share a kind (their shadow rays are the same);
+/// a directional light is keyed by its direction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct LightKey {
+    directional: bool,
+    bits: [u32; 3],
+}
+
+impl LightKey {
+    pub fn of(light: &RenderLight) -> LightKey {
+        let (directional, v) = match light.source {
+            LightSource::Point { position } | LightSource::Spot { position, .. } => {
+                (false, position)
+            }
+            LightSource::Directional { towards } => (true, towards),
+        };
+        LightKey {
+            directional,
+            bits: v.to_array().map(f32::to_bits),
+        }
+    }
+}
+
+/// Static-layer bits by light key and brick: the content of a cache file.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StaticMaskCache {
+    sections: BTreeMap<LightKey, BTreeMap<[i32; 3], BrickLightBits>>,
+}
+
+impl StaticMaskCache {
+    /// The static bits `store` holds for each of `lights` (at its current
+    /// position).
+    pub fn from_store(store: &MaskStore, lights: &[RenderLight]) -> StaticMaskCache {
+        let mut cache = StaticMaskCache::default();
+        for (index, light) in lights.iter().enumerate() {
+            cache.add_light(store, index, light);
+        }
+        cache
+    }
+
+    /// ORs in the static bits `store` holds for light `index`, standing at
+    /// `light`'s position.
+    pub fn add_light(&mut self, store: &MaskStore, index: usize, light: &RenderLight) {
+        let mut bricks = store.static_bits_of(index).peekable();
+        if bricks.peek().is_none() {
+            return;
+        }
+        let section = self.sections.entry(LightKey::of(light)).or_default();
+        for (brick, bits) in bricks {
+            merge_brick(section, brick.to_array(), &bits);
+        }
+    }
+
+    /// ORs `other` in. Static bits are a function of the key, so two
+    /// workers' files cannot disagree where both have a bit.
+    pub fn merge(&mut self, other: StaticMaskCache) {
+        for (light, bricks) in other.sections {
+            let section = self.sections.entry(light).or_default();
+            for (brick, bits) in bricks {
+                merge_brick(section, brick, &bits);
+            }
+        }
+    }
+
+    /// Valid static bits held, over all sections.
+    pub fn bits(&self) -> u64 {
+        self.sections
+            .values()
+            .flat_map(|bricks| bricks.values())
+            .map(|bits| {
+                bits.valid
+                    .iter()
+                    .map(|w| w.count_ones() as u64)
+                    .sum::<u64>()
+            })
+            .sum()
+    }
+
+    /// Imports the bits of every light of `lights` whose position has a
+    /// section into `store`, creating at most `max_bricks` bricks in all;
+    /// returns the bits imported.
+    pub fn import(&self, store: &mut MaskStore, lights: &[RenderLight], max_bricks: usize) -> u64 {
+        let mut imported = 0;
+        for (index, light) in lights.iter().enumerate() {
+            let Some(bricks) = self.sections.get(&LightKey::of(light)) else {
+                continue;
+            };
+            for (&brick, bits) in bricks {
+                let brick = IVec3::from_array(brick);
+                if store.has_brick(brick) || store.brick_count() < max_bricks {
+                    imported += store.import_static(brick, index, bits);
+                }
+            }
+        }
+        imported
+    }
+
+    /// The file's bytes for `key`.
+    pub fn encode(&self, key: CacheKey) -> Vec<u8> {
+        let mut body = Vec::new();
+        for (light, bricks) in &self.sections {
+            body.push(light.directional as u8);
+            for value in light.bits {
+                body.extend_from_slice(&value.to_le_bytes());
+            }
+            body.extend_from_slice(&(bricks.len() as u32).to_le_bytes());
+            for (brick, bits) in bricks {
+                for value in brick {
+                    body.extend_from_slice(&value.to_le_bytes());
+                }
+                for word in bits.valid.iter().chain(&bits.visible) {
+                    body.extend_from_slice(&word.to_le_bytes());
+                }
+            }
+        }
+        let mut bytes = Vec::with_capacity(HEADER_BYTES + body.len());
+        bytes.extend_from_slice(&MAGIC);
+        bytes.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        bytes.extend_from_slice(&key.0.to_le_bytes());
+        bytes.extend_from_slice(&(self.sections.len() as u32).to_le_bytes());
+        bytes.extend_from_slice(&(body.len() as u64).to_le_bytes());
+        bytes.extend_from_slice(&xxh3_64(&body).to_le_bytes());
+        bytes.extend_from_slice(&body);
+        bytes
+    }
+
+    /// Parses and verifies a file's bytes, which must have been written
+    /// for `key`.
+    pub fn decode(bytes: &[u8], key: CacheKey) -> Result<StaticMaskCache, CacheError> {
+        if bytes.len() < HEADER_BYTES {
+            return Err(CacheError::TooShort(bytes.len()));
+        }
+        let mut header = Reader { bytes, at: 0 };
+        if header.take(8)? != MAGIC {
+            return Err(CacheError::Magic);
+        }
+        let version = header.u32()?;
+        if version != FORMAT_VERSION {
+            return Err(CacheError::Version { found: version });
+        }
+        let found = u128::from_le_bytes(header.array()?);
+        if found != key.0 {
+            return Err(CacheError::ForeignKey { found });
+        }
+        let sections = header.u32()?;
+        let body_len = header.u64()?;
+        let checksum = header.u64()?;
+        let body = &bytes[HEADER_BYTES..];
+        if body.len() as u64 != body_len {
+            return Err(CacheError::Length {
+                expected: body_len,
+                found: body.len(),
+            });
+        }
+        if xxh3_64(body) != checksum {
+            return Err(CacheError::Checksum);
+        }
+
+        let mut reader = Reader { bytes: body, at: 0 };
+        let mut cache = StaticMaskCache::default();
+        for _ in 0..sections {
+            let directional = match reader.u8()? {
+                0 => false,
+                1 => true,
+                _ => return Err(CacheError::Malformed("unknown light kind")),
+            };
+            let light = LightKey {
+                directional,
+                bits: [reader.u32()?, reader.u32()?, reader.u32()?],
+            };
+            let count = reader.u32()? as usize;
+            if count.saturating_mul(BRICK_BYTES) > reader.remaining() {
+                return Err(CacheError::Malformed("more bricks than bytes"));
+            }
+            let section = cache.sections.entry(light).or_default();
+            for _ in 0..count {
+                let brick = [reader.i32()?, reader.i32()?, reader.i32()?];
+                if brick.iter().any(|c| c.abs() > MAX_BRICK_COORDINATE) {
+                    return Err(CacheError::Malformed("brick outside any lattice"));
+                }
+                let mut bits = BrickLightBits::default();
+                for word in bits.valid.iter_mut().chain(&mut bits.visible) {
+                    *word = reader.u64()?;
+                }
+                if bits
+                    .visible
+                    .iter()
+                    .zip(&bits.valid)
+                    .any(|(v, ok)| v & !ok != 0)
+                {
+                    return Err(CacheError::Malformed("a visible bit that is not valid"));
+                }
+                merge_brick(section, brick, &bits);
+            }
+        }
+        if reader.remaining() != 0 {
+            return Err(CacheError::Malformed("bytes after the last section"));
+        }
+        Ok(cache)
+    }
+
+    /// The cache in `dir` for `key`: None when there is no file, or (with
+    /// a warning) when it cannot be read or fails verification.
+    pub fn load(dir: &Path, key: CacheKey) -> Option<StaticMaskCache> {
+        let path = key.path_in(dir);
+        let bytes = match std::fs::read(&path) {
+            Ok(bytes) => bytes,
+            Err(error) if error.kind() == std::io::ErrorKind::NotFound => return None,
+            Err(error) => {
+                log::warn!("{}: {}; ignored", path.display(), CacheError::from(error));
+                return None;
+            }
+        };
+        match StaticMaskCache::decode(&bytes, key) {
+            Ok(cache) => Some(cache),
+            Err(error) => {
+                log::warn!("{}: {error}; ignored", path.display());
+                None
+            }
+        }
+    }
+
+    /// Writes the cache to `dir` for `key`, merged with the file already
+    /// there (another worker's), atomically. Savers of one key take turns
+    /// through a lock file so that neither loses the other's bits; a lock
+    /// older than a minute is taken over. Writing without the lock
+    /// (when it cannot be had) can lose bits, which later runs recompute,
+    /// but never leaves a torn file.
+    pub fn save(mut self, dir: &Path, key: CacheKey) -> Result<(), OutputError> {
+        let path = key.path_in(dir);
+        std::fs::create_dir_all(dir).map_err(|source| OutputError::CreateDir {
+            path: dir.to_path_buf(),
+            source,
+        })?;
+        let _lock = SaveLock::acquire(&path);
+        if let Some(existing) = StaticMaskCache::load(dir, key) {
+            self.merge(existing);
+        }
+        let bytes = self.encode(key);
+        write_atomically(&path, |writer| {
+            writer
+                .write_all(&bytes)
+                .map_err(|source| OutputError::Write {
+                    path: path.clone(),
+                    source,
+                })
+        })
+    }
+}
+
+fn merge_brick(
+    section: &mut BTreeMap<[i32; 3], BrickLightBits>,
+    brick: [i32; 3],
+    bits: &BrickLightBits,
+) {
+    let stored = section.entry(brick).or_default();
+    for word in 0..BRICK_WORDS {
+        stored.visible[word] |= bits.visible[word];
+        stored.valid[word] |= bits.valid[word];
+    }
+}
+
+/// A lock file beside the cache file, held while reading, merging and
+/// writing; removed when dropped.
+struct SaveLock(Option<PathBuf>);
+
+impl SaveLock {
+    fn acquire(target: &Path) -> SaveLock {
+        let mut name = target.as_os_str().to_owned();
+        name.push(".lock");
+        let lock = PathBuf::from(name);
+        let started = Instant::now();
+        loop {
+            match File::create_new(&lock) {
+                Ok(_) => return SaveLock(Some(lock)),
+                Err(error) if error.kind() == std::io::ErrorKind::AlreadyExists => {
+                    if started.elapsed() > 2 * STALE_LOCK {
+                        log::warn!(
+                            "{}: still locked after {} s; writing without the lock",
+                            lock.display(),
+                            started.elapsed().as_secs()
+                        );
+                        return SaveLock(None);
+                    }
+                    let age = std::fs::metadata(&lock)
+                        .and_then(|meta| meta.modified())
+                        .ok()
+                        .and_then(|modified| modified.elapsed().ok());
+                    if age.is_some_and(|age| age > STALE_LOCK) {
+                        log::warn!("{}: stale lock removed", lock.display());
+                        // Another saver may remove it first; either way the
+                        // next attempt decides who holds it.
+                        let _ = std::fs::remove_file(&lock);
+                        continue;
+                    }
+                    std::thread::sleep(Duration::from_millis(5));
+                }
+                Err(error) => {
+                    log::warn!("{}: {error}; writing without the lock", lock.display());
+                    return SaveLock(None);
+                }
+            }
+        }
+    }
+}
+
+impl Drop for SaveLock {
+    fn drop(&mut self) {
+        if let Some(lock) = &self.0 {
+            // A lock that cannot be removed only makes later savers wait.
+            let _ = std::fs::remove_file(lock);
+        }
+    }
+}
+
+/// Reads little-endian values off a byte slice, failing on truncation.
+struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize) -> Result<&'a [u8], CacheError> {
+        let end = self
+            .at
+            .checked_add(n)
+            .filter(|&end| end <= self.bytes.len())
+            .ok_or(CacheError::Malformed("ends in the middle of a value"))?;
+        let slice = &self.bytes[self.at..end];
+        self.at = end;
+        Ok(slice)
+    }
+
+    fn array<const N: usize>(&mut self) -> Result<[u8; N], CacheError> {
+        let mut array = [0; N];
+        array.copy_from_slice(self.take(N)?);
+        Ok(array)
+    }
+
+    fn remaining(&self) -> usize {
+        self.bytes.len() - self.at
+    }
+
+    fn u8(&mut self) -> Result<u8, CacheError> {
+        Ok(self.take(1)?[0])
+    }
+
+    fn u32(&mut self) -> Result<u32, CacheError> {
+        Ok(u32::from_le_bytes(self.array()?))
+    }
+
+    fn i32(&mut self) -> Result<i32, CacheError> {
+        Ok(i32::from_le_bytes(self.array()?))
+    }
+
+    fn u64(&mut self) -> Result<u64, CacheError> {
+        Ok(u64::from_le_bytes(self.array()?))
+    }
+}
+
+impl LightMesh {
+    /// Imports the static bits that `dir` holds for this lattice, the
+    /// static geometry hashed as `geometry`, and `lights` at their current
+    /// positions; returns the bits imported. The store may grow to half its
+    /// memory limit this way, leaving the rest to the frames.
+    pub fn load_static_masks(&mut self, dir: &Path, geometry: u128, lights: &[RenderLight]) -> u64 {
+        let key = CacheKey::new(geometry, &self.lattice);
+        let Some(cache) = StaticMaskCache::load(dir, key) else {
+            return 0;
+        };
+        let max_bricks = self.memory_limit / 2 / MaskStore::brick_bytes(lights.len());
+        cache.import(&mut self.masks, lights, max_bricks)
+    }
+
+    /// Copies the static bits of the lights `moved` into `kept` before
+    /// invalidation drops them; `lights` says where they stood.
+    pub fn keep_static_masks(
+        &self,
+        kept: &mut StaticMaskCache,
+        lights: &[RenderLight],
+        moved: impl IntoIterator<Item = usize>,
+    ) {
+        for index in moved {
+            kept.add_light(&self.masks, index, &lights[index]);
+        }
+    }
+
+    /// Saves the static bits of `lights` (at their current positions) and
+    /// those `kept` from earlier positions to `dir`, merged with the file
+    /// there.
+    pub fn save_static_masks(
+        &self,
+        dir: &Path,
+        geometry: u128,
+        lights: &[RenderLight],
+        kept: &StaticMaskCache,
+    ) -> Result<(), OutputError> {
+        let key = CacheKey::new(geometry, &self.lattice);
+        let mut cache = StaticMaskCache::from_store(&self.masks, lights);
+        cache.merge(kept.clone());
+        cache.save(dir, key)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(position: Vec3) -> RenderLight {
+        RenderLight {
+            source: LightSource::Point { position },
+            power: Vec3::ONE,
+            range: None,
+            lamp_radius: 0.1,
+        }
+    }
+
+    fn sample() -> (StaticMaskCache, Vec<RenderLight>) {
+        let lights = vec![
+            point(Vec3::new(0.0, 5.0, 0.0)),
+            point(Vec3::new(3.0, 5.0, 1.0)),
+        ];
+        let mut store = MaskStore::new(lights.len());
+        store.set(IVec3::new(-9, 2, 17), 0, true, Some(true));
+        store.set(IVec3::new(-9, 2, 18), 0, false, None);
+        store.set(IVec3::new(40, -3, 0), 1, true, None);
+        (StaticMaskCache::from_store(&store, &lights), lights)
+    }
+
+    #[test]
+    fn encoding_round_trips_and_imports_static_bits_only() {
+        let (cache, lights) = sample();
+        assert_eq!(cache.bits(), 3);
+        let key = CacheKey(0x1234);
+        let decoded = StaticMaskCache::decode(&cache.encode(key), key).unwrap();
+        assert_eq!(decoded, cache);
+
+        // The lights swapped places: sections follow positions.
+        let swapped = vec![lights[1], lights[0]];
+        let mut store = MaskStore::new(2);
+        assert_eq!(decoded.import(&mut store, &swapped, usize::MAX), 3);
+        let node = store.node(IVec3::new(-9, 2, 17)).unwrap();
+        assert_eq!(node.static_layer(0), (0b10, 0b10));
+        assert_eq!(
+            node.dynamic_layer(0),
+            (0, 0),
+            "the dynamic layer is not cached"
+        );
+        assert_eq!(store.get(IVec3::new(-9, 2, 18), 1), Some(false));
+        assert_eq!(store.get(IVec3::new(40, -3, 0), 0), None, "statically open");
+        assert_eq!(store.nodes_cached(), 3);
+        assert_eq!(store.static_bits(), 3);
+    }
+
+    #[test]
+    fn import_creates_no_brick_past_the_limit() {
+        let (cache, lights) = sample();
+        let mut store = MaskStore::new(2);
+        assert_eq!(cache.import(&mut store, &lights, 0), 0);
+        assert_eq!(store.brick_count(), 0);
+        // Nodes (-9, 2, 17) and (-9, 2, 18) share a brick; (40, -3, 0) not.
+        assert_eq!(cache.import(&mut store, &lights, 1), 2);
+        assert_eq!(store.brick_count(), 1);
+    }
+
+    #[test]
+    fn damaged_or_foreign_bytes_are_refused() {
+        let (cache, _) = sample();
+        let key = CacheKey(7);
+        let bytes = cache.encode(key);
+        let refuse = |bytes: &[u8]| StaticMaskCache::decode(bytes, key).unwrap_err();
+        assert!(matches!(refuse(&[]), CacheError::TooShort(0)));
+        assert!(matches!(
+            refuse(&bytes[..bytes.len() - 1]),
+            CacheError::Length { .. }
+        ));
+        let mut flipped = bytes.clone();
+        flipped[HEADER_BYTES + 20] ^= 0x10;
+        assert!(matches!(refuse(&flipped), CacheError::Checksum));
+        let mut magic = bytes.clone();
+        magic[0] = b'X';
+        assert!(matches!(refuse(&magic), CacheError::Magic));
+        let mut version = bytes.clone();
+        version[8] = 99;
+        assert!(matches!(
+            refuse(&version),
+            CacheError::Version { found: 99 }
+        ));
+        assert!(matches!(
+            StaticMaskCache::decode(&bytes, CacheKey(8)).unwrap_err(),
+            CacheError::ForeignKey { found: 7 }
+        ));
+    }
+
+    #[test]
+    fn keys_change_with_the_lattice_and_the_geometry() {
+        let triangles = [[0, 1, 2]];
+        let positions = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let moved = [Vec3::ZERO, Vec3::X, Vec3::new(0.0, 1.0, 1e-6)];
+        let geometry = |positions: &[Vec3]| {
+            static_geometry_hash([(0, positions, &triangles[..], Affine3A::IDENTITY)])
+        };
+        let lattice = Lattice::new(0.25);
+        let key = CacheKey::new(geometry(&positions), &lattice);
+        assert_eq!(key, CacheKey::new(geometry(&positions), &lattice));
+        assert_ne!(key, CacheKey::new(geometry(&moved), &lattice));
+        assert_ne!(
+            key,
+            CacheKey::new(geometry(&positions), &Lattice::new(0.26))
+        );
+    }
+}

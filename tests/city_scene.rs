@@ -1,0 +1,227 @@
+//! The showcase animation `animations/city.gltf` (written by
+//! `cargo run --example make_animations`) holds what the project promises
+//! of it — a block of at least 100 buildings and 200k triangles, 16 lamps
+//! with radii, 6 driving cars, skinned swaying trees and a 10 s camera
+//! fly-through —, renders, and passes the Khronos glTF validator.
+//!
+//! Node and npm are required by the validator: without them the test
+//! fails and says so. The pinned `gltf-validator` is installed with
+//! `npm ci` on first use.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::Value;
+
+use lmanim::backend::CpuBackend;
+use lmanim::scene::{LightKind, SceneDesc, Target};
+use lmanim::sequence::Sequence;
+use lmanim::settings::{Method, Settings};
+use lmanim::stats::FrameStats;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn city_path() -> PathBuf {
+    root().join("animations/city.gltf")
+}
+
+fn named<'a>(scene: &'a SceneDesc, prefix: &'a str) -> impl Iterator<Item = usize> + 'a {
+    scene
+        .nodes
+        .iter()
+        .enumerate()
+        .filter_map(move |(index, node)| {
+            node.name
+                .as_deref()
+                .is_some_and(|name| name.starts_with(prefix))
+                .then_some(index)
+        })
+}
+
+fn is_joint(scene: &SceneDesc, node: usize) -> bool {
+    scene.skins.iter().any(|skin| skin.joints.contains(&node))
+}
+
+/// The last key time of any channel driving `node`.
+fn animated_until(scene: &SceneDesc, node: usize) -> f32 {
+    scene
+        .animations
+        .iter()
+        .flat_map(|clip| &clip.channels)
+        .filter(|channel| channel.target.node() == node)
+        .map(|channel| channel.sampler.end())
+        .fold(0.0, f32::max)
+}
+
+#[test]
+fn the_city_holds_what_it_promises() {
+    let scene = lmanim::import::load(&city_path()).expect("import animations/city.gltf");
+    let buildings = named(&scene, "Building.")
+        .filter(|&node| scene.nodes[node].mesh.is_some())
+        .count();
+    let triangles: usize = scene
+        .nodes
+        .iter()
+        .filter_map(|node| node.mesh)
+        .map(|mesh| scene.meshes[mesh].triangles.len())
+        .sum();
+    let lamps = scene
+        .nodes
+        .iter()
+        .filter_map(|node| node.light)
+        .map(|light| &scene.lights[light])
+        .filter(|light| {
+            matches!(light.kind, LightKind::Point) && light.radius.is_some_and(|r| r > 0.0)
+        })
+        .count();
+    let cars: Vec<usize> = named(&scene, "Car.")
+        .filter(|&node| scene.nodes[node].animated && animated_until(&scene, node) > 0.0)
+        .collect();
+    let trees = scene
+        .nodes
+        .iter()
+        .filter(|node| node.skin.is_some() && node.deforms && node.mesh.is_some())
+        .count();
+    let swaying = scene
+        .animations
+        .iter()
+        .flat_map(|clip| &clip.channels)
+        .filter(|channel| matches!(channel.target, Target::Rotation(_)))
+        .filter(|channel| is_joint(&scene, channel.target.node()))
+        .count();
+    let camera = scene
+        .nodes
+        .iter()
+        .position(|node| node.camera.is_some() && node.name.as_deref() == Some("flythrough"))
+        .expect("the camera \"flythrough\"");
+    println!(
+        "{buildings} buildings, {triangles} triangles, {lamps} lamps, {} cars, {trees} trees",
+        cars.len()
+    );
+    assert!(buildings >= 100, "{buildings} buildings");
+    assert!(triangles >= 200_000, "{triangles} triangles in the scene");
+    assert!(lamps >= 16, "{lamps} point lamps with a radius");
+    assert!(cars.len() >= 6, "{} animated cars", cars.len());
+    assert!(trees >= 8, "{trees} skinned trees");
+    assert!(
+        swaying >= trees,
+        "{swaying} swaying joints for {trees} trees"
+    );
+    assert!(scene.nodes[camera].animated);
+    assert!(
+        animated_until(&scene, camera) >= 10.0,
+        "the fly-through covers 240 frames at 24 fps"
+    );
+}
+
+#[test]
+fn frames_of_the_fly_through_render() {
+    let mut settings = Settings::load(&root().join("animations/city.ron")).expect("city.ron");
+    assert_eq!(settings.method, Method::Lmm1);
+    assert_eq!(settings.camera.as_deref(), Some("flythrough"));
+    settings.width = 64;
+    settings.height = 36;
+    let backend = CpuBackend::new(Some(2)).expect("backend");
+    let mut sequence = Sequence::load(&city_path()).expect("load the city");
+    for frame in [0u32, 120] {
+        let time = f64::from(frame) / settings.fps;
+        let mut stats = FrameStats::default();
+        let placed = sequence
+            .advance(time, &settings, &mut stats)
+            .expect("advance");
+        let image = sequence
+            .render(&backend, &placed, &settings, &mut stats)
+            .expect("render");
+        assert!(
+            image.pixels.iter().all(|pixel| pixel.is_finite()),
+            "frame {frame} has a non-finite pixel"
+        );
+        let lit = image
+            .pixels
+            .iter()
+            .filter(|pixel| pixel.truncate().max_element() > 1e-3)
+            .count();
+        println!("frame {frame}: {lit} of {} pixels lit", image.pixels.len());
+        assert!(
+            lit > image.pixels.len() / 20 && lit < image.pixels.len(),
+            "frame {frame}: {lit} of {} pixels lit; expected a partly lit street",
+            image.pixels.len()
+        );
+    }
+}
+
+fn validator_dir() -> PathBuf {
+    root().join("tests/gltf_validator")
+}
+
+/// Node and npm on PATH, and the validator installed from the lock file.
+fn prepare_validator() {
+    for tool in ["node", "npm"] {
+        let found = Command::new(tool)
+            .arg("--version")
+            .output()
+            .is_ok_and(|output| output.status.success());
+        assert!(
+            found,
+            "`{tool}` is required by the Khronos glTF validator and was not found on PATH; \
+             install Node.js (v18 or later) with npm"
+        );
+    }
+    let dir = validator_dir();
+    if dir
+        .join("node_modules/gltf-validator/package.json")
+        .is_file()
+    {
+        return;
+    }
+    let output = Command::new("npm")
+        .args(["ci", "--no-audit", "--no-fund"])
+        .current_dir(&dir)
+        .output()
+        .expect("run npm ci");
+    assert!(
+        output.status.success(),
+        "`npm ci` in {} failed (is the npm registry reachable?):\n{}",
+        dir.display(),
+        String::from_utf8_lossy(&output.stderr)
+    );
+}
+
+#[test]
+fn the_city_passes_the_khronos_validator() {
+    prepare_validator();
+    let output = Command::new("node")
+        .arg(validator_dir().join("validate.mjs"))
+        .arg(city_path())
+        .current_dir(validator_dir())
+        .output()
+        .expect("start node");
+    assert!(
+        output.status.success(),
+        "the glTF validator failed:\n{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let report: Value = serde_json::from_slice(&output.stdout).expect("validator JSON");
+    let issues = &report["issues"];
+    for message in issues["messages"].as_array().into_iter().flatten() {
+        println!(
+            "{} (severity {}) at {}: {}",
+            message["code"], message["severity"], message["pointer"], message["message"]
+        );
+    }
+    println!(
+        "validator {}: {} errors, {} warnings, {} infos, {} hints",
+        report["validatorVersion"],
+        issues["numErrors"],
+        issues["numWarnings"],
+        issues["numInfos"],
+        issues["numHints"]
+    );
+    assert_eq!(
+        issues["numErrors"].as_u64(),
+        Some(0),
+        "the validator found errors"
+    );
+}
