@@ -87,6 +87,9 @@ struct RenderArgs {
     /// Image height in pixels.
     #[arg(long)]
     height: Option<u32>,
+    /// Play only this animation clip (name or index); default: all clips together.
+    #[arg(long)]
+    clip: Option<String>,
     /// Render through the camera with this name (default: the first).
     #[arg(long)]
     camera: Option<String>,
@@ -286,6 +289,7 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     settings.spp = flags.spp.unwrap_or(settings.spp);
     settings.threads = flags.threads.or(settings.threads);
     settings.camera = flags.camera.clone().or(settings.camera);
+    settings.clip = flags.clip.clone().or(settings.clip);
     settings.out = flags.out.clone().or(settings.out);
     settings.png |= flags.png;
     if flags.no_cache {

@@ -37,6 +37,8 @@ pub enum RunError {
         file: String,
         source: LightMeshError,
     },
+    #[error("{file}: --clip {fault}")]
+    Clip { file: String, fault: String },
     #[error("the output pattern '{0}' has no '#' placeholder, so several frames would overwrite one file")]
     PatternWithoutPlaceholder(String),
     #[error(transparent)]
@@ -52,6 +54,7 @@ impl RunError {
             RunError::Import(_)
                 | RunError::Place { .. }
                 | RunError::LightMesh { .. }
+                | RunError::Clip { .. }
                 | RunError::PatternWithoutPlaceholder(_)
         )
     }
@@ -177,6 +180,11 @@ impl Sequence {
     /// The light mesh, once an LMM frame has made it.
     pub fn light_mesh(&self) -> Option<&LightMesh> {
         self.light_mesh.as_ref()
+    }
+
+    /// Plays `clips` from the next frame on (all clips by default).
+    pub fn set_clips(&mut self, clips: ClipSelection) {
+        self.clips = clips;
     }
 
     /// Uses `dir` as the light mesh's disk cache (static masks), or none.
@@ -404,6 +412,14 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
     let backend = CpuBackend::new(settings.threads)?;
     let mut sequence = Sequence::load(job.scene_path)?;
     sequence.set_cache_dir(settings.cache_dir.as_ref().map(PathBuf::from));
+    if let Some(clip) = &settings.clip {
+        let clips =
+            ClipSelection::parse(sequence.scene(), clip).map_err(|fault| RunError::Clip {
+                file: job.scene_path.display().to_string(),
+                fault,
+            })?;
+        sequence.set_clips(clips);
+    }
     let mut run = RunStats {
         threads: backend.threads(),
         method: settings.method.to_string(),

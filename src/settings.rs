@@ -35,6 +35,8 @@ pub struct Settings {
     pub max_depth: u32,
     /// Camera node or camera name; None takes the first camera.
     pub camera: Option<String>,
+    /// Animation clip to play (name or index); None plays all together.
+    pub clip: Option<String>,
     pub exr_precision: ExrPrecision,
     /// Also write a tone-mapped PNG preview of every frame.
     pub png: bool,
@@ -61,6 +63,7 @@ impl Default for Settings {
             spp: 1,
             max_depth: 5,
             camera: None,
+            clip: None,
             exr_precision: ExrPrecision::Half,
             png: false,
             threads: None,

@@ -167,6 +167,10 @@ fn bad_usage_exits_2_with_one_line() {
         "#",
     );
     assert_bad_usage(&lmanim(&["/no/such/scene.gltf"]), "/no/such/scene.gltf");
+    assert_bad_usage(
+        &lmanim(&[&scene, "--clip", "Nope", "--out", "/tmp/x.#.exr"]),
+        "--clip",
+    );
     // Clap's own usage errors keep its exit code 2 (several lines of help).
     assert_eq!(lmanim(&[&scene, "--spp", "many"]).status.code(), Some(2));
 }
