@@ -9,6 +9,7 @@
 //! pinned three.js is installed with `npm ci` on first use.
 
 mod anim_support;
+mod node_support;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -25,40 +26,6 @@ const TOLERANCE: f64 = 1e-4;
 struct Case {
     file: PathBuf,
     clip: Option<&'static str>,
-}
-
-fn threejs_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/threejs")
-}
-
-/// Node and npm on PATH, and three.js installed from the lock file.
-fn prepare_threejs() {
-    for tool in ["node", "npm"] {
-        let found = Command::new(tool)
-            .arg("--version")
-            .output()
-            .is_ok_and(|output| output.status.success());
-        assert!(
-            found,
-            "`{tool}` is required by the three.js comparison and was not found on PATH; \
-             install Node.js (v18 or later) with npm"
-        );
-    }
-    let dir = threejs_dir();
-    if dir.join("node_modules/three/package.json").is_file() {
-        return;
-    }
-    let output = Command::new("npm")
-        .args(["ci", "--no-audit", "--no-fund"])
-        .current_dir(&dir)
-        .output()
-        .expect("run npm ci");
-    assert!(
-        output.status.success(),
-        "`npm ci` in {} failed (is the npm registry reachable?):\n{}",
-        dir.display(),
-        String::from_utf8_lossy(&output.stderr)
-    );
 }
 
 fn times_arg() -> String {
@@ -88,14 +55,14 @@ fn lmanim_inspect(case: &Case) -> Value {
     serde_json::from_slice(&output.stdout).expect("inspect JSON")
 }
 
-fn threejs_poses(cases: &[Case]) -> Value {
+fn threejs_poses(package_dir: &Path, cases: &[Case]) -> Value {
     let request: Vec<Value> = cases
         .iter()
         .map(|case| json!({ "file": case.file, "clip": case.clip, "times": anim_support::TIMES }))
         .collect();
     let mut child = Command::new("node")
-        .arg(threejs_dir().join("sample.mjs"))
-        .current_dir(threejs_dir())
+        .arg(package_dir.join("sample.mjs"))
+        .current_dir(package_dir)
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -226,7 +193,7 @@ fn compare_case(case: &Case, ours: &Value, theirs: &Value, errors: &mut Errors) 
 
 #[test]
 fn poses_match_threejs() {
-    prepare_threejs();
+    let package_dir = node_support::node_package_dir("threejs", "three", "the three.js comparison");
     let dir = tempfile::tempdir().expect("tempdir");
     let morph = anim_support::morph(dir.path());
     let cases = [
@@ -247,7 +214,7 @@ fn poses_match_threejs() {
             clip: Some("pulse"),
         },
     ];
-    let theirs = threejs_poses(&cases);
+    let theirs = threejs_poses(&package_dir, &cases);
     let mut errors = Errors::default();
     for (index, case) in cases.iter().enumerate() {
         compare_case(case, &lmanim_inspect(case), &theirs[index], &mut errors);

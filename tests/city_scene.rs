@@ -8,6 +8,8 @@
 //! fails and says so. The pinned `gltf-validator` is installed with
 //! `npm ci` on first use.
 
+mod node_support;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -152,50 +154,17 @@ fn frames_of_the_fly_through_render() {
     }
 }
 
-fn validator_dir() -> PathBuf {
-    root().join("tests/gltf_validator")
-}
-
-/// Node and npm on PATH, and the validator installed from the lock file.
-fn prepare_validator() {
-    for tool in ["node", "npm"] {
-        let found = Command::new(tool)
-            .arg("--version")
-            .output()
-            .is_ok_and(|output| output.status.success());
-        assert!(
-            found,
-            "`{tool}` is required by the Khronos glTF validator and was not found on PATH; \
-             install Node.js (v18 or later) with npm"
-        );
-    }
-    let dir = validator_dir();
-    if dir
-        .join("node_modules/gltf-validator/package.json")
-        .is_file()
-    {
-        return;
-    }
-    let output = Command::new("npm")
-        .args(["ci", "--no-audit", "--no-fund"])
-        .current_dir(&dir)
-        .output()
-        .expect("run npm ci");
-    assert!(
-        output.status.success(),
-        "`npm ci` in {} failed (is the npm registry reachable?):\n{}",
-        dir.display(),
-        String::from_utf8_lossy(&output.stderr)
-    );
-}
-
 #[test]
 fn the_city_passes_the_khronos_validator() {
-    prepare_validator();
+    let package_dir = node_support::node_package_dir(
+        "gltf_validator",
+        "gltf-validator",
+        "the Khronos glTF validator",
+    );
     let output = Command::new("node")
-        .arg(validator_dir().join("validate.mjs"))
+        .arg(package_dir.join("validate.mjs"))
         .arg(city_path())
-        .current_dir(validator_dir())
+        .current_dir(package_dir)
         .output()
         .expect("start node");
     assert!(

@@ -14,7 +14,7 @@ use glam::{DMat4, DVec3, Vec3};
 use lmanim::backend::CpuBackend;
 use lmanim::lightmesh::cache::{CacheKey, StaticMaskCache};
 use lmanim::output::Image;
-use lmanim::scene::animation::{AnimationClip, Channel, Interpolation, Sampler, Target};
+use lmanim::scene::animation::AnimationClip;
 use lmanim::scene::{LightKind, Projection, SceneDesc};
 use lmanim::sequence::Sequence;
 use lmanim::settings::{Method, Settings};
@@ -63,29 +63,31 @@ fn yard(wall_x: f32, lamp_moves: bool) -> SceneDesc {
     for light in &mut scene.lights {
         light.radius = Some(0.2);
     }
-    let translation = |node: usize, from: Vec3, to: Vec3| Channel {
-        target: Target::Translation(node),
-        sampler: Sampler {
-            interpolation: Interpolation::Linear,
-            times: vec![0.0, 2.0],
-            values: vec![from.x, from.y, from.z, to.x, to.y, to.z],
-            width: 3,
-        },
-    };
     scene.animations.push(AnimationClip {
         name: Some("yard".into()),
         channels: vec![
-            translation(mover, Vec3::new(-4.0, 0.0, 1.0), Vec3::new(-1.0, 0.0, 3.0)),
-            translation(camera, Vec3::new(-6.0, 5.0, 8.0), Vec3::new(-2.0, 6.0, 9.0)),
+            linear_translation(
+                mover,
+                Vec3::new(-4.0, 0.0, 1.0),
+                Vec3::new(-1.0, 0.0, 3.0),
+                2.0,
+            ),
+            linear_translation(
+                camera,
+                Vec3::new(-6.0, 5.0, 8.0),
+                Vec3::new(-2.0, 6.0, 9.0),
+                2.0,
+            ),
         ],
     });
     scene.nodes[mover].animated = true;
     scene.nodes[camera].animated = true;
     if lamp_moves {
-        scene.animations[0].channels.push(translation(
+        scene.animations[0].channels.push(linear_translation(
             lamp,
             Vec3::new(4.0, 3.0, -3.0),
             Vec3::new(3.0, 3.5, -1.0),
+            2.0,
         ));
         scene.nodes[lamp].animated = true;
     }

@@ -10,25 +10,13 @@ use common::*;
 use glam::{DMat4, DVec3, Vec3};
 use lmanim::backend::CpuBackend;
 use lmanim::output::Image;
-use lmanim::scene::animation::{AnimationClip, Channel, Interpolation, Sampler, Target};
+use lmanim::scene::animation::AnimationClip;
 use lmanim::scene::{LightKind, Projection, SceneDesc};
 use lmanim::sequence::Sequence;
 use lmanim::settings::{Method, Settings};
 use lmanim::stats::FrameStats;
 
 const TIMES: [f64; 4] = [0.0, 1.0, 2.0, 3.0];
-
-fn linear_translation(node: usize, from: Vec3, to: Vec3) -> Channel {
-    Channel {
-        target: Target::Translation(node),
-        sampler: Sampler {
-            interpolation: Interpolation::Linear,
-            times: vec![0.0, 3.0],
-            values: vec![from.x, from.y, from.z, to.x, to.y, to.z],
-            width: 3,
-        },
-    }
-}
 
 /// A street with a facade at x = 30, a lamp at the origin, a second lamp
 /// and a camera looking at the facade; what moves is up to `animate`.
@@ -76,6 +64,7 @@ fn street(truck_moves: bool, light_moves: bool, camera_moves: bool) -> SceneDesc
             truck,
             Vec3::new(-30.0, 0.0, 0.0),
             Vec3::new(11.0, 0.0, 0.0),
+            3.0,
         ));
         scene.nodes[truck].animated = true;
     }
@@ -84,6 +73,7 @@ fn street(truck_moves: bool, light_moves: bool, camera_moves: bool) -> SceneDesc
             second,
             Vec3::new(25.0, 6.0, 9.0),
             Vec3::new(22.0, 6.0, -6.0),
+            3.0,
         ));
         scene.nodes[second].animated = true;
     }
@@ -92,6 +82,7 @@ fn street(truck_moves: bool, light_moves: bool, camera_moves: bool) -> SceneDesc
             camera,
             Vec3::new(18.0, 4.0, 14.0),
             Vec3::new(14.0, 5.0, 10.0),
+            3.0,
         ));
         scene.nodes[camera].animated = true;
     }

@@ -232,3 +232,22 @@ pub fn rms_difference(a: &Image, b: &Image) -> f32 {
         .sum();
     (sum / (3 * a.pixels.len()) as f64).sqrt() as f32
 }
+
+/// A LINEAR translation channel from `from` at time 0 to `to` at `duration`.
+pub fn linear_translation(
+    node: usize,
+    from: Vec3,
+    to: Vec3,
+    duration: f32,
+) -> lmanim::scene::animation::Channel {
+    use lmanim::scene::animation::{Channel, Interpolation, Sampler, Target};
+    Channel {
+        target: Target::Translation(node),
+        sampler: Sampler {
+            interpolation: Interpolation::Linear,
+            times: vec![0.0, duration],
+            values: vec![from.x, from.y, from.z, to.x, to.y, to.z],
+            width: 3,
+        },
+    }
+}
