@@ -22,7 +22,9 @@ use std::path::Path;
 use anyhow::Context;
 use glam::{Quat, Vec2, Vec3, Vec4};
 use lmanim::authoring::city::{city_block, CityParams};
-use lmanim::authoring::{look_at_rotation, shapes, GltfBuilder, MeshId, NodeDesc, Primitive};
+use lmanim::authoring::{
+    look_at_rotation, matte, shapes, GltfBuilder, MeshId, NodeDesc, Primitive,
+};
 use lmanim::scene::animation::{AnimationClip, Channel, Interpolation, Sampler, Target};
 use lmanim::scene::{Camera, Light, LightKind, Material, Projection};
 
@@ -53,17 +55,6 @@ fn showcase_city() -> CityParams {
         cars: 8,
         trees: 12,
         flythrough: true,
-    }
-}
-
-/// A dielectric (non-metal) material of one colour.
-fn matte(name: &str, colour: Vec3, roughness: f32) -> Material {
-    Material {
-        name: Some(name.into()),
-        base_color: colour.extend(1.0),
-        metallic: 0.0,
-        roughness,
-        ..Material::default()
     }
 }
 

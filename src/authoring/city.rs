@@ -15,12 +15,10 @@ mod parts;
 use glam::{DMat4, DVec3, Quat, Vec2, Vec3};
 
 use super::{
-    look_at_rotation, shapes, AuthoringError, GeometryId, GltfBuilder, MaterialId, MeshId,
+    look_at_rotation, matte, shapes, AuthoringError, GeometryId, GltfBuilder, MaterialId, MeshId,
     NodeDesc, NodeId, Primitive,
 };
-use crate::scene::{
-    AnimationClip, Camera, Channel, Light, LightKind, Material, Projection, Skin, Target,
-};
+use crate::scene::{AnimationClip, Camera, Channel, Light, LightKind, Projection, Skin, Target};
 use motion::{FlyThrough, Route};
 
 /// The shape of a generated city block.
@@ -114,17 +112,6 @@ impl Layout {
     /// nearest the street camera 0, rows half a pitch apart.
     fn along_main(self, row: f32) -> f32 {
         self.centre(self.blocks - 1) - 0.5 * PITCH - row * 0.5 * PITCH
-    }
-}
-
-/// A dielectric (non-metal) material of one colour.
-fn matte(name: &str, colour: Vec3, roughness: f32) -> Material {
-    Material {
-        name: Some(name.into()),
-        base_color: colour.extend(1.0),
-        metallic: 0.0,
-        roughness,
-        ..Material::default()
     }
 }
 

@@ -29,7 +29,7 @@ pub use error::AuthoringError;
 
 use glam::{Mat3, Quat, Vec2, Vec3};
 
-use crate::scene::{JointSet, MorphTarget};
+use crate::scene::{JointSet, Material, MorphTarget};
 
 /// Triangle geometry in object space: one glTF primitive's attributes.
 /// Triangles wind counter-clockwise seen from their front.
@@ -146,6 +146,17 @@ impl NodeDesc {
             name: Some(name.to_owned()),
             ..NodeDesc::default()
         }
+    }
+}
+
+/// A dielectric (non-metal) material of one colour, for generated scenes.
+pub fn matte(name: &str, colour: Vec3, roughness: f32) -> Material {
+    Material {
+        name: Some(name.into()),
+        base_color: colour.extend(1.0),
+        metallic: 0.0,
+        roughness,
+        ..Material::default()
     }
 }
 
