@@ -8,21 +8,22 @@ use glam::{Vec2, Vec3};
 
 use super::Geometry;
 
+/// The six faces of a cube as (outward normal, u, v) with u × v = normal,
+/// so corners `-u-v, u-v, u+v, -u+v` run counter-clockwise seen from outside.
+pub const CUBE_FACES: [(Vec3, Vec3, Vec3); 6] = [
+    (Vec3::X, Vec3::Y, Vec3::Z),
+    (Vec3::NEG_X, Vec3::Z, Vec3::Y),
+    (Vec3::Y, Vec3::Z, Vec3::X),
+    (Vec3::NEG_Y, Vec3::X, Vec3::Z),
+    (Vec3::Z, Vec3::X, Vec3::Y),
+    (Vec3::NEG_Z, Vec3::Y, Vec3::X),
+];
+
 /// A box with the given half extents; every face has its own four vertices
 /// so that normals stay flat (hard edges).
 pub fn cuboid(half_extents: Vec3) -> Geometry {
-    // (normal, u, v) with u × v = normal, so the corner order below runs
-    // counter-clockwise around the normal.
-    let faces = [
-        (Vec3::X, Vec3::Y, Vec3::Z),
-        (Vec3::NEG_X, Vec3::Z, Vec3::Y),
-        (Vec3::Y, Vec3::Z, Vec3::X),
-        (Vec3::NEG_Y, Vec3::X, Vec3::Z),
-        (Vec3::Z, Vec3::X, Vec3::Y),
-        (Vec3::NEG_Z, Vec3::Y, Vec3::X),
-    ];
     let mut geometry = Geometry::default();
-    for (normal, u, v) in faces {
+    for (normal, u, v) in CUBE_FACES {
         add_face(&mut geometry, half_extents, normal, u, v);
     }
     geometry
