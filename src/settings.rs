@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use crate::lightmesh::lattice::MAX_KI;
 use crate::output::ExrPrecision;
 
 /// The largest width or height accepted: beyond it a frame buffer no
@@ -215,9 +216,9 @@ impl Settings {
             return Err("threads is 0; leave it out to use every core".into());
         }
         let lightmesh = &self.lightmesh;
-        if !lightmesh.ki.is_finite() || lightmesh.ki <= 0.0 {
+        if !lightmesh.ki.is_finite() || lightmesh.ki <= 0.0 || lightmesh.ki > MAX_KI {
             return Err(format!(
-                "lightmesh.ki is {}; it must be positive",
+                "lightmesh.ki is {}; it must be above 0 and at most {MAX_KI}",
                 lightmesh.ki
             ));
         }

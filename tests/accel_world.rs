@@ -165,8 +165,14 @@ proptest! {
             dynamic: false,
         }];
         let world = World::build(&objects);
+        let mut remembered = None;
         for ray in rays(&mut rng, &objects) {
             check(&world, &objects, &ray);
+            // The shadow-cache query answers exactly what `occluded` does,
+            // whichever triangle it is handed first (often one that misses).
+            let occluder = world.static_occluder(&ray, remembered);
+            prop_assert_eq!(occluder.is_some(), world.occluded_static(&ray), "ray {:?}", ray);
+            remembered = occluder.or(remembered);
         }
     }
 

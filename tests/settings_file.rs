@@ -107,7 +107,7 @@ type BreakRule = fn(&mut Settings);
 /// Each case breaks one rule; the message must name the field.
 #[test]
 fn impossible_values_are_rejected() {
-    let cases: [(&str, BreakRule); 19] = [
+    let cases: [(&str, BreakRule); 20] = [
         ("width", |s| s.width = 0),
         ("width", |s| s.width = 32769),
         ("height", |s| s.height = 0),
@@ -120,6 +120,7 @@ fn impossible_values_are_rejected() {
         ("max_depth", |s| s.max_depth = 65),
         ("lightmesh.ki", |s| s.lightmesh.ki = 0.0),
         ("lightmesh.ki", |s| s.lightmesh.ki = f32::NAN),
+        ("lightmesh.ki", |s| s.lightmesh.ki = 8.5),
         ("lightmesh.h", |s| s.lightmesh.h = Some(-1.0)),
         ("lightmesh.h", |s| s.lightmesh.h = Some(0.0)),
         ("lightmesh.h", |s| s.lightmesh.h = Some(f32::INFINITY)),

@@ -26,7 +26,7 @@ pub mod world;
 pub use bounds::Bounds;
 pub use offset::offset_ray_origin;
 pub use ray::Ray;
-pub use world::{Hit, World, WorldError, WorldObject};
+pub use world::{Hit, StaticTriangle, World, WorldError, WorldObject};
 
 use mesh_bvh::Layout;
 use obvhs::BvhBuildParams;

@@ -64,6 +64,11 @@ enum Placement {
     Dynamic(usize),
 }
 
+/// A triangle of the static structure, as [`World::static_occluder`] names
+/// it: only meaningful for the world that returned it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StaticTriangle(u32);
+
 pub struct World {
     static_bvh: MeshBvh,
     static_bounds: Bounds,
@@ -164,6 +169,19 @@ impl World {
     /// Whether static geometry lies on the ray in `(0, t_max)`.
     pub fn occluded_static(&self, ray: &Ray) -> bool {
         self.static_bvh.occluded(ray)
+    }
+
+    /// A static triangle on the ray in `(0, t_max)`, or None: the same
+    /// answer as [`World::occluded_static`], trying `hint` (what a nearby
+    /// segment found) before walking the tree.
+    pub fn static_occluder(
+        &self,
+        ray: &Ray,
+        hint: Option<StaticTriangle>,
+    ) -> Option<StaticTriangle> {
+        self.static_bvh
+            .occluder(ray, hint.map(|triangle| triangle.0))
+            .map(StaticTriangle)
     }
 
     /// Whether a dynamic object lies on the ray in `(0, t_max)`.

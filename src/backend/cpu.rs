@@ -197,7 +197,8 @@ fn render_band(
             stats.add_stage_time("fill", start.elapsed().as_secs_f64());
 
             let (mesh, variant) = (&**mesh, *variant);
-            shade_stage(&points, stats, Scratch::default, |scratch, index, point| {
+            let scratch = || Scratch::new(mesh);
+            shade_stage(&points, stats, scratch, |scratch, index, point| {
                 mesh.shade(
                     point,
                     demand.reach_of(index),

@@ -8,7 +8,7 @@ use glam::IVec3;
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
-use super::masks::{split, BRICK_NODES};
+use super::masks::{parity, split, BRICK_NODES};
 use super::{LightMesh, LightMeshError};
 use crate::render::light::RenderLight;
 use crate::render::surface::ShadingPoint;
@@ -42,13 +42,15 @@ impl Demand {
 /// Points per parallel chunk: large enough that neighbours share nodes.
 const CHUNK: usize = 4096;
 
-/// Brick tables under construction, with the last brick touched cached
-/// (consecutive nodes of a half-ball usually share it).
+/// Brick tables under construction, with the bricks touched last cached
+/// by the parity of their coordinates (a half-ball spans at most 2×2×2
+/// bricks, and consecutive points share them), as in
+/// [`super::masks::BrickCache`].
 struct BrickTables {
     words: usize,
     index: FxHashMap<IVec3, usize>,
     bricks: Vec<BrickDemand>,
-    last: Option<(IVec3, usize)>,
+    recent: [Option<(IVec3, usize)>; 8],
 }
 
 impl BrickTables {
@@ -57,13 +59,14 @@ impl BrickTables {
             words,
             index: FxHashMap::default(),
             bricks: Vec::new(),
-            last: None,
+            recent: [None; 8],
         }
     }
 
     fn table(&mut self, brick: IVec3) -> &mut [u64] {
-        let position = match self.last {
-            Some((last, position)) if last == brick => position,
+        let entry = parity(brick);
+        let position = match self.recent[entry] {
+            Some((recent, position)) if recent == brick => position,
             _ => {
                 let words = self.words;
                 let bricks = &mut self.bricks;
@@ -74,7 +77,7 @@ impl BrickTables {
                     });
                     bricks.len() - 1
                 });
-                self.last = Some((brick, position));
+                self.recent[entry] = Some((brick, position));
                 position
             }
         };

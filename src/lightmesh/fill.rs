@@ -11,7 +11,8 @@
 //! of one query; otherwise each gets its own segment. (Splitting blocked
 //! shafts into octants was measured: more queries than the segments they
 //! save.) Shafts only ever settle "nothing in the way", conservatively, so
-//! the bits are exactly those the segments give. A world without dynamic
+//! the bits are exactly those the segments give. A blocked segment's
+//! triangle is remembered and tried first on the group's next segment. A world without dynamic
 //! objects settles the dynamic layer without any query.
 
 use rayon::prelude::*;
@@ -34,23 +35,42 @@ struct FilledBrick {
     work: FillWork,
 }
 
-/// What settling bits cost: shaft queries and single segments.
+/// What settling bits cost: shaft queries, single segments, and how many of
+/// those the remembered occluder answered without a walk.
 #[derive(Clone, Copy, Debug, Default)]
 struct FillWork {
     shafts: u64,
     segments: u64,
+    remembered: u64,
 }
 
 /// Fewer nodes than this are cheaper to trace one by one than by a shaft.
 const MIN_SHAFT_NODES: usize = 4;
 
-/// One layer's test for one light word: whether a shaft is certainly clear
-/// and whether a segment is blocked.
+/// The two layers of a mask, each tested against its own geometry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Layer {
+    /// Static visibility: segments against the static structure.
+    Static,
+    /// Dynamic occlusion: segments against the dynamic objects only.
+    Dynamic,
+}
+
+impl Layer {
+    fn shaft_is_clear(self, world: &World, shaft: &Shaft) -> bool {
+        match self {
+            Layer::Static => world.shaft_is_clear_static(shaft),
+            Layer::Dynamic => world.shaft_is_clear_dynamic(shaft),
+        }
+    }
+}
+
+/// One layer's test for one light word.
 struct LayerTest<'a> {
     lights: &'a [RenderLight],
     word: usize,
-    shaft_is_clear: &'a (dyn Fn(&Shaft) -> bool + Sync),
-    blocked: &'a (dyn Fn(&crate::accel::Ray) -> bool + Sync),
+    world: &'a World,
+    layer: Layer,
 }
 
 impl LayerTest<'_> {
@@ -87,13 +107,30 @@ impl LayerTest<'_> {
                     (lo.min(positions[i]), hi.max(positions[i]))
                 });
             work.shafts += 1;
-            if (self.shaft_is_clear)(&Shaft::new(min, max, apex)) {
+            if self
+                .layer
+                .shaft_is_clear(self.world, &Shaft::new(min, max, apex))
+            {
                 return;
             }
         }
+        // A shadow cache: the brick's nodes sit side by side, so the wall
+        // that hides the light from one of them usually hides it from the
+        // next; its triangle is tried before the tree is walked.
+        let mut remembered = None;
         for &i in members {
             work.segments += 1;
-            if (self.blocked)(&light.shadow_ray(positions[i])) {
+            let ray = light.shadow_ray(positions[i]);
+            let occluded = match self.layer {
+                Layer::Static => {
+                    let occluder = self.world.static_occluder(&ray, remembered);
+                    work.remembered += u64::from(occluder.is_some() && occluder == remembered);
+                    remembered = occluder.or(remembered);
+                    occluder.is_some()
+                }
+                Layer::Dynamic => self.world.occluded_dynamic(&ray),
+            };
+            if occluded {
                 blocked[i] |= bit;
             }
         }
@@ -123,6 +160,7 @@ impl LightMesh {
             stats.bits_reused += filled.bits_needed - filled.bits_computed;
             stats.fill_shafts += filled.work.shafts;
             stats.fill_segments += filled.work.segments;
+            stats.fill_remembered += filled.work.remembered;
             if filled.bits_computed > 0 {
                 self.masks.merge_brick(brick.brick, &filled.update);
             }
@@ -160,10 +198,6 @@ impl LightMesh {
             bits_computed: 0,
             work: FillWork::default(),
         };
-        let static_clear = |shaft: &Shaft| world.shaft_is_clear_static(shaft);
-        let static_blocked = |ray: &crate::accel::Ray| world.occluded_static(ray);
-        let dynamic_clear = |shaft: &Shaft| world.shaft_is_clear_dynamic(shaft);
-        let dynamic_blocked = |ray: &crate::accel::Ray| world.occluded_dynamic(ray);
         let mut computed_any = vec![false; slots.len()];
         for word in 0..words {
             let missing_static: Vec<u64> = slots
@@ -173,8 +207,8 @@ impl LightMesh {
             let static_test = LayerTest {
                 lights,
                 word,
-                shaft_is_clear: &static_clear,
-                blocked: &static_blocked,
+                world,
+                layer: Layer::Static,
             };
             let static_blocked_bits =
                 static_test.settle(&positions, &missing_static, &mut filled.work);
@@ -191,8 +225,8 @@ impl LightMesh {
             let dynamic_test = LayerTest {
                 lights,
                 word,
-                shaft_is_clear: &dynamic_clear,
-                blocked: &dynamic_blocked,
+                world,
+                layer: Layer::Dynamic,
             };
             let dynamic_blocked_bits = if world.has_dynamic() {
                 dynamic_test.settle(&positions, &missing_dynamic, &mut filled.work)

@@ -9,7 +9,7 @@
 
 use glam::{IVec3, Vec3};
 
-use super::masks::{split, MaskStore, NodeMask};
+use super::masks::BrickCache;
 use super::LightMesh;
 use crate::accel::offset::offset_ray_origin;
 use crate::accel::{Ray, World};
@@ -54,13 +54,28 @@ impl std::ops::AddAssign for PointCounts {
     }
 }
 
-/// Reusable per-thread buffers, so shading allocates nothing per point.
-#[derive(Default)]
-pub struct Scratch {
+/// Reusable per-thread buffers, so shading allocates nothing per point,
+/// and the brick lookups neighbouring points share.
+pub struct Scratch<'a> {
     nodes: Vec<IVec3>,
+    /// The visible-light words of each node of the set, node after node.
+    visible: Vec<u64>,
     /// Per light word: lights visible from every node, from some node.
     all: Vec<u64>,
     any: Vec<u64>,
+    bricks: BrickCache<'a>,
+}
+
+impl<'a> Scratch<'a> {
+    pub fn new(mesh: &'a LightMesh) -> Scratch<'a> {
+        Scratch {
+            nodes: Vec::new(),
+            visible: Vec::new(),
+            all: Vec::new(),
+            any: Vec::new(),
+            bricks: BrickCache::new(mesh.masks()),
+        }
+    }
 }
 
 impl LightMesh {
@@ -77,7 +92,13 @@ impl LightMesh {
         scratch: &mut Scratch,
     ) -> (Vec3, PointCounts) {
         let mut counts = PointCounts::default();
-        let Scratch { nodes, all, any } = scratch;
+        let Scratch {
+            nodes,
+            visible,
+            all,
+            any,
+            bricks,
+        } = scratch;
         nodes.clear();
         self.lattice
             .half_ball(point.position, point.geometric_normal, self.radius(), nodes);
@@ -103,23 +124,24 @@ impl LightMesh {
         // Where every node agrees (far from shadow edges, the common case)
         // a light is fully visible or fully hidden; only lights the nodes
         // disagree on need their visible nodes counted.
-        let masks = self.masks();
+        let words = reach.len();
+        visible.clear();
         all.clear();
         all.extend_from_slice(reach);
         any.clear();
-        any.resize(reach.len(), 0);
-        let mut bricks = BrickCursor::default();
+        any.resize(words, 0);
         for &node in nodes.iter() {
-            let mask = bricks.mask(masks, node);
-            for word in 0..reach.len() {
+            let mask = bricks.mask(node);
+            for word in 0..words {
                 debug_assert_eq!(
                     mask.map_or(0, |m| m.valid(word)) & reach[word],
                     reach[word],
                     "formula (2) read a mask bit that the fill stage did not compute"
                 );
-                let visible = mask.map_or(0, |m| m.visible(word));
-                all[word] &= visible;
-                any[word] |= visible & reach[word];
+                let seen = mask.map_or(0, |m| m.visible(word)) & reach[word];
+                visible.push(seen);
+                all[word] &= seen;
+                any[word] |= seen;
             }
         }
         let mut radiance = Vec3::ZERO;
@@ -128,45 +150,22 @@ impl LightMesh {
             while bits != 0 {
                 let bit = bits.trailing_zeros() as usize;
                 bits &= bits - 1;
-                let light = word * 64 + bit;
-                let Some(omega) = point.omega(&lights[light]) else {
+                let Some(omega) = point.omega(&lights[word * 64 + bit]) else {
                     continue;
                 };
                 if all[word] >> bit & 1 == 1 {
                     radiance += omega;
                 } else {
-                    let visible = nodes
+                    let seen = visible
                         .iter()
-                        .filter(|&&node| {
-                            bricks.mask(masks, node).and_then(|m| m.get(light)) == Some(true)
-                        })
+                        .skip(word)
+                        .step_by(words)
+                        .filter(|&&seen| seen >> bit & 1 == 1)
                         .count();
-                    radiance += omega * (visible as f32 / m as f32);
+                    radiance += omega * (seen as f32 / m as f32);
                 }
             }
         }
         (radiance, counts)
-    }
-}
-
-/// Looks up node masks, remembering the last brick: a half-ball's nodes
-/// come in lattice order, so most lookups hit the same brick as the last.
-#[derive(Default)]
-struct BrickCursor<'a> {
-    last: Option<(IVec3, Option<&'a [u64]>)>,
-}
-
-impl<'a> BrickCursor<'a> {
-    fn mask(&mut self, masks: &'a MaskStore, node: IVec3) -> Option<NodeMask<'a>> {
-        let (brick, slot) = split(node);
-        let bits = match self.last {
-            Some((last, bits)) if last == brick => bits,
-            _ => {
-                let bits = masks.brick(brick);
-                self.last = Some((brick, bits));
-                bits
-            }
-        };
-        bits.map(|bits| masks.slot_mask(bits, slot))
     }
 }

@@ -16,6 +16,13 @@ pub const GENERAL_POSITION: Vec3 = Vec3::new(0.382_683_4, 0.414_213_57, 0.447_21
 /// and neighbour offsets cannot overflow.
 pub const MAX_NODE_COORDINATE: f32 = (1 << 28) as f32;
 
+/// The largest interpolation radius, in steps (kI): the paper uses 2.1–3;
+/// at 8 a point already averages a thousand nodes. Settings refuse more.
+pub const MAX_KI: f32 = 8.0;
+
+/// Most nodes along one axis of a half-ball's box.
+const MAX_SPAN: usize = 2 * MAX_KI as usize + 1;
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lattice {
     pub origin: Vec3,
@@ -50,21 +57,46 @@ impl Lattice {
     /// rounding of node positions and surface points (a few ULPs of the
     /// coordinates), so a floor lying on a lattice plane loses all of its
     /// in-plane nodes rather than a random half of them.
+    ///
+    /// `radius` is at most [`MAX_KI`] steps.
     pub fn half_ball(&self, p: Vec3, n: Vec3, radius: f32, out: &mut Vec<IVec3>) {
         let local = (p - self.origin) / self.h;
         let reach = radius / self.h;
+        assert!(
+            reach <= MAX_KI,
+            "half-ball radius of {reach} steps; at most {MAX_KI}"
+        );
         let low = (local - Vec3::splat(reach)).ceil().as_ivec3();
         let high = (local + Vec3::splat(reach)).floor().as_ivec3();
         let radius_squared = radius * radius;
         let on_plane =
             8.0 * f32::EPSILON * (p.abs().max_element() + self.origin.abs().max_element() + radius);
-        for k in low.z..=high.z {
-            for j in low.y..=high.y {
-                for i in low.x..=high.x {
-                    let node = IVec3::new(i, j, k);
-                    let offset = self.node_position(node) - p;
+        // Offsets per axis, computed once: `node_position(node) - p` for
+        // each coordinate, exactly as a per-node evaluation would round it.
+        let offsets = |axis: usize, from: i32, to: i32| {
+            let mut along = [0.0f32; MAX_SPAN];
+            for (slot, index) in along.iter_mut().zip(from..=to) {
+                *slot = (self.origin[axis] + self.h * index as f32) - p[axis];
+            }
+            along
+        };
+        let (x, y, z) = (
+            offsets(0, low.x, high.x),
+            offsets(1, low.y, high.y),
+            offsets(2, low.z, high.z),
+        );
+        let span = |from: i32, to: i32| (to - from + 1).clamp(0, MAX_SPAN as i32) as usize;
+        for (kz, &dz) in z[..span(low.z, high.z)].iter().enumerate() {
+            for (jy, &dy) in y[..span(low.y, high.y)].iter().enumerate() {
+                // (x² + y²) + z² ≥ y² + z² in rounded arithmetic too: a row
+                // whose centre misses the ball has no node in it.
+                if dy * dy + dz * dz > radius_squared {
+                    continue;
+                }
+                for (ix, &dx) in x[..span(low.x, high.x)].iter().enumerate() {
+                    let offset = Vec3::new(dx, dy, dz);
                     if offset.length_squared() <= radius_squared && n.dot(offset) > on_plane {
-                        out.push(node);
+                        out.push(low + IVec3::new(ix as i32, jy as i32, kz as i32));
                     }
                 }
             }

@@ -365,10 +365,54 @@ impl BrickValidity<'_> {
 
 /// The brick holding `node` and the node's slot in it.
 pub fn split(node: IVec3) -> (IVec3, usize) {
-    let brick = node.div_euclid(IVec3::splat(BRICK_EDGE));
-    let local = node.rem_euclid(IVec3::splat(BRICK_EDGE));
+    // Floor division and remainder by the power-of-two edge, negative
+    // coordinates included (an arithmetic shift rounds towards −∞).
+    let brick = node >> BRICK_EDGE.trailing_zeros() as i32;
+    let local = node & (BRICK_EDGE - 1);
     let slot = ((local.z * BRICK_EDGE + local.y) * BRICK_EDGE + local.x) as usize;
     (brick, slot)
+}
+
+/// Reads node masks through a small cache of brick lookups. A half-ball
+/// spans at most two bricks per axis at the usual kI, and neighbouring
+/// shading points share them, so entries are kept by the parity of the
+/// brick coordinates: the bricks of any 2×2×2 block never evict each other.
+pub struct BrickCache<'a> {
+    store: &'a MaskStore,
+    entries: [Option<CachedBrick<'a>>; 8],
+}
+
+/// A brick's coordinates and its bits, None when the store has none.
+type CachedBrick<'a> = (IVec3, Option<&'a [u64]>);
+
+impl<'a> BrickCache<'a> {
+    pub fn new(store: &'a MaskStore) -> BrickCache<'a> {
+        BrickCache {
+            store,
+            entries: [None; 8],
+        }
+    }
+
+    /// The node's mask, or None when no bit of its brick was ever computed.
+    pub fn mask(&mut self, node: IVec3) -> Option<NodeMask<'a>> {
+        let (brick, slot) = split(node);
+        let entry = parity(brick);
+        let bits = match self.entries[entry] {
+            Some((cached, bits)) if cached == brick => bits,
+            _ => {
+                let bits = self.store.brick(brick);
+                self.entries[entry] = Some((brick, bits));
+                bits
+            }
+        };
+        bits.map(|bits| self.store.slot_mask(bits, slot))
+    }
+}
+
+/// Which of 8 cache entries a brick takes: the parities of its
+/// coordinates, distinct for the 8 bricks of any 2×2×2 block.
+pub fn parity(brick: IVec3) -> usize {
+    (brick.x & 1 | (brick.y & 1) << 1 | (brick.z & 1) << 2) as usize
 }
 
 /// The node in `slot` of `brick` (the inverse of [`split`]).
@@ -415,6 +459,28 @@ mod tests {
         // A neighbour in the same brick is untouched.
         assert_eq!(store.get(node + IVec3::X, 129), None);
         assert_eq!(store.nodes_cached(), 1);
+    }
+
+    #[test]
+    fn the_brick_cache_reads_what_the_store_holds() {
+        let mut store = MaskStore::new(1);
+        // Bricks 0 and 2 along x share a cache entry; negative bricks too.
+        let nodes: Vec<IVec3> = [-17, -9, -1, 0, 5, 8, 16, 17, 23]
+            .iter()
+            .flat_map(|&i| [IVec3::new(i, 0, 0), IVec3::new(i, -i, 3)])
+            .collect();
+        for (index, node) in nodes.iter().enumerate() {
+            store.set(*node, 0, index % 3 != 0, Some(index % 5 == 0));
+        }
+        let mut cache = BrickCache::new(&store);
+        for round in 0..2 {
+            for (index, node) in nodes.iter().enumerate() {
+                let expected = index % 3 != 0 && index % 5 != 0;
+                let mask = cache.mask(*node).expect("a stored node");
+                assert_eq!(mask.get(0), Some(expected), "node {node} round {round}");
+            }
+        }
+        assert!(cache.mask(IVec3::new(100, 0, 0)).is_none());
     }
 
     #[test]

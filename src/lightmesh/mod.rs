@@ -65,6 +65,9 @@ pub struct LightMeshStats {
     pub fill_shafts: u64,
     /// Node-to-light segments the fill traced one by one.
     pub fill_segments: u64,
+    /// Of those, segments answered by the triangle that blocked the
+    /// previous node's segment to the same light, without a tree walk.
+    pub fill_remembered: u64,
     /// Nodes with any valid bit after the frame.
     pub nodes_cached: u64,
     /// Mean nodes per shading point after steps 1–2.

@@ -20,7 +20,6 @@ use std::f32::consts::TAU;
 
 use glam::{Vec2, Vec3};
 
-use super::brdf;
 use super::light::RenderLight;
 use super::surface::ShadingPoint;
 use crate::accel::offset::offset_ray_origin;
@@ -93,7 +92,7 @@ pub fn sample_light(point: &ShadingPoint, light: &RenderLight, u: Vec2) -> Optio
     if cos_surface <= 0.0 {
         return None;
     }
-    let reflectance = brdf::evaluate(&point.material, point.shading_normal, point.view, direction);
+    let reflectance = point.brdf.evaluate(direction);
     // f · L · cos / pdf with L = E d² / (π R²) and 1/pdf = 2π (1 − cos θmax):
     // since 1 − cos θmax = (R²/d²) / (1 + cos θmax), the radii cancel and
     // the weight is 2 / (1 + cos θmax), which tends to 1 (the point light)
@@ -180,10 +179,20 @@ impl Cone {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::brdf::PointBrdf;
     use crate::render::light::LightSource;
     use crate::render::material::SurfaceMaterial;
 
     fn lambert_point(position: Vec3, normal: Vec3) -> ShadingPoint {
+        let material = SurfaceMaterial {
+            base_color: Vec3::splat(0.5),
+            metallic: 0.0,
+            roughness: 1.0,
+            specular: 0.0,
+            transmission: 0.0,
+            ior: 1.5,
+            emissive: Vec3::ZERO,
+        };
         ShadingPoint {
             sample: 0,
             weight: Vec3::ONE,
@@ -193,15 +202,8 @@ mod tests {
             shading_normal: normal,
             front_face: true,
             view: normal,
-            material: SurfaceMaterial {
-                base_color: Vec3::splat(0.5),
-                metallic: 0.0,
-                roughness: 1.0,
-                specular: 0.0,
-                transmission: 0.0,
-                ior: 1.5,
-                emissive: Vec3::ZERO,
-            },
+            brdf: PointBrdf::new(&material, normal, normal),
+            material,
         }
     }
 

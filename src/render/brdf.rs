@@ -19,30 +19,89 @@ pub fn schlick_weight(cos_theta: f32) -> f32 {
 /// either direction is below the surface. The part of the diffuse lobe that
 /// is transmitted (KHR_materials_transmission) is left to the refracted ray.
 pub fn evaluate(material: &SurfaceMaterial, n: Vec3, v: Vec3, l: Vec3) -> Vec3 {
-    let n_dot_l = n.dot(l);
-    let n_dot_v = n.dot(v);
-    if n_dot_l <= 0.0 || n_dot_v <= 0.0 {
-        return Vec3::ZERO;
-    }
-    let h = (v + l).normalize_or_zero();
-    if h == Vec3::ZERO {
-        return Vec3::ZERO;
-    }
-    let n_dot_h = n.dot(h).max(0.0);
-    let v_dot_h = v.dot(h).max(0.0);
+    PointBrdf::new(material, n, v).evaluate(l)
+}
 
-    let roughness = material.highlight_roughness();
-    let alpha = roughness * roughness;
-    let specular = ggx_distribution(n_dot_h, alpha) * smith_visibility(n_dot_l, n_dot_v, alpha);
-    let fresnel = schlick_weight(v_dot_h);
+/// The BRDF at one shading point, with everything that does not depend on
+/// the light computed once: formulas (1) and (2) evaluate it for every
+/// light that reaches the point, dozens in a street of lamps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointBrdf {
+    n: Vec3,
+    v: Vec3,
+    n_dot_v: f32,
+    /// α² of the GGX lobe (α = roughness²).
+    alpha2: f32,
+    /// The view half of the height-correlated Smith term,
+    /// `sqrt((n·v)² (1 − α²) + α²)`.
+    view_smith: f32,
+    /// Lambert's lobe, less what transmission takes.
+    diffuse: Vec3,
+    base_color: Vec3,
+    metallic: f32,
+    specular: f32,
+    dielectric_f0: f32,
+}
 
-    let diffuse = material.base_color / PI * (1.0 - material.transmission);
-    let dielectric_f0 = 0.04 * material.specular;
-    let dielectric_fresnel = dielectric_f0 + (material.specular - dielectric_f0) * fresnel;
-    let dielectric =
-        diffuse * (1.0 - dielectric_fresnel) + Vec3::splat(specular * dielectric_fresnel);
-    let metal = specular * (material.base_color + (Vec3::ONE - material.base_color) * fresnel);
-    dielectric.lerp(metal, material.metallic)
+impl PointBrdf {
+    pub fn new(material: &SurfaceMaterial, n: Vec3, v: Vec3) -> PointBrdf {
+        let n_dot_v = n.dot(v);
+        let roughness = material.highlight_roughness();
+        let alpha = roughness * roughness;
+        let alpha2 = alpha * alpha;
+        PointBrdf {
+            n,
+            v,
+            n_dot_v,
+            alpha2,
+            view_smith: (n_dot_v * n_dot_v * (1.0 - alpha2) + alpha2).sqrt(),
+            diffuse: material.base_color / PI * (1.0 - material.transmission),
+            base_color: material.base_color,
+            metallic: material.metallic,
+            specular: material.specular,
+            dielectric_f0: 0.04 * material.specular,
+        }
+    }
+
+    /// f(v, l) for the unit light direction `l`.
+    pub fn evaluate(&self, l: Vec3) -> Vec3 {
+        let n_dot_l = self.n.dot(l);
+        if n_dot_l <= 0.0 || self.n_dot_v <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let h = (self.v + l).normalize_or_zero();
+        if h == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let n_dot_h = self.n.dot(h).max(0.0);
+        let v_dot_h = self.v.dot(h).max(0.0);
+
+        let specular = ggx_distribution(n_dot_h, self.alpha2) * self.smith_visibility(n_dot_l);
+        let fresnel = schlick_weight(v_dot_h);
+        let dielectric_fresnel =
+            self.dielectric_f0 + (self.specular - self.dielectric_f0) * fresnel;
+        let dielectric =
+            self.diffuse * (1.0 - dielectric_fresnel) + Vec3::splat(specular * dielectric_fresnel);
+        if self.metallic == 0.0 {
+            return dielectric;
+        }
+        let metal = specular * (self.base_color + (Vec3::ONE - self.base_color) * fresnel);
+        dielectric.lerp(metal, self.metallic)
+    }
+
+    /// Height-correlated Smith G divided by 4 |n·l| |n·v|, as the spec
+    /// writes it.
+    fn smith_visibility(&self, n_dot_l: f32) -> f32 {
+        let alpha2 = self.alpha2;
+        let ggx_v = n_dot_l * self.view_smith;
+        let ggx_l = self.n_dot_v * (n_dot_l * n_dot_l * (1.0 - alpha2) + alpha2).sqrt();
+        let sum = ggx_v + ggx_l;
+        if sum > 0.0 {
+            0.5 / sum
+        } else {
+            0.0
+        }
+    }
 }
 
 /// Fresnel reflectance of a mirror reflection seen at `cos_theta`, the
@@ -55,23 +114,9 @@ pub fn mirror_reflectance(material: &SurfaceMaterial, cos_theta: f32) -> Vec3 {
     Vec3::splat(dielectric).lerp(metal, material.metallic)
 }
 
-fn ggx_distribution(n_dot_h: f32, alpha: f32) -> f32 {
-    let alpha2 = alpha * alpha;
+fn ggx_distribution(n_dot_h: f32, alpha2: f32) -> f32 {
     let denominator = n_dot_h * n_dot_h * (alpha2 - 1.0) + 1.0;
     alpha2 / (PI * denominator * denominator)
-}
-
-/// Height-correlated Smith G divided by 4 |n·l| |n·v|, as the spec writes it.
-fn smith_visibility(n_dot_l: f32, n_dot_v: f32, alpha: f32) -> f32 {
-    let alpha2 = alpha * alpha;
-    let ggx_v = n_dot_l * (n_dot_v * n_dot_v * (1.0 - alpha2) + alpha2).sqrt();
-    let ggx_l = n_dot_v * (n_dot_l * n_dot_l * (1.0 - alpha2) + alpha2).sqrt();
-    let sum = ggx_v + ggx_l;
-    if sum > 0.0 {
-        0.5 / sum
-    } else {
-        0.0
-    }
 }
 
 #[cfg(test)]

@@ -5,7 +5,6 @@
 
 use glam::Vec3;
 
-use super::brdf;
 use super::light::{Incidence, RenderLight};
 use super::surface::ShadingPoint;
 use crate::accel::offset::offset_ray_origin;
@@ -31,12 +30,7 @@ impl ShadingPoint {
     /// occluders.
     pub fn omega(&self, light: &RenderLight) -> Option<Vec3> {
         let (incidence, cos_theta) = self.reaching(light)?;
-        let reflectance = brdf::evaluate(
-            &self.material,
-            self.shading_normal,
-            self.view,
-            incidence.direction,
-        );
+        let reflectance = self.brdf.evaluate(incidence.direction);
         let value = reflectance * incidence.irradiance * cos_theta;
         (value.max_element() > 0.0).then_some(value)
     }

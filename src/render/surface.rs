@@ -5,6 +5,7 @@
 
 use glam::{Vec2, Vec3};
 
+use super::brdf::PointBrdf;
 use super::frame::FrameScene;
 use super::material::SurfaceMaterial;
 use crate::accel::{Hit, Ray};
@@ -31,6 +32,8 @@ pub struct ShadingPoint {
     /// Unit direction from the point back along the incoming ray.
     pub view: Vec3,
     pub material: SurfaceMaterial,
+    /// The material's BRDF at this point, prepared for many lights.
+    pub brdf: PointBrdf,
 }
 
 impl ShadingPoint {
@@ -99,6 +102,7 @@ impl ShadingPoint {
             shading_normal,
             front_face,
             view: towards_viewer,
+            brdf: PointBrdf::new(&material, shading_normal, towards_viewer),
             material,
         }
     }
