@@ -88,6 +88,7 @@ impl CpuBackend {
                     mean_interp_set: counts.interp_set as f64 / points,
                     mean_p2n_tests: counts.p2n_tests as f64 / points,
                     fallback_points: counts.fallback,
+                    bits_cached: mesh.masks().known_bits(),
                     ..lightmesh
                 });
             }

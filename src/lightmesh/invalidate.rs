@@ -7,19 +7,26 @@
 //! a moved light drops both layers of its bits.
 //!
 //! Testing every cached node against every region and light would cost more
-//! than a frame, so whole bricks are culled first against the cone that a
-//! region's bounding sphere casts from the light (a directional light casts
-//! a cylinder); only nodes of bricks inside it get the exact segment test.
+//! than a frame, so space is culled first against the cone that a region's
+//! bounding sphere casts from the light (a directional light casts a
+//! cylinder): groups of 8×8×8 bricks against every (light, region) pair,
+//! then each brick of a group against the pairs its group kept; only nodes
+//! of bricks inside a cone get the exact segment test.
 //! Culling is conservative and the node test pads the regions by rounding
 //! error, so a bit that may have changed is always dropped: re-computing it
 //! gives the same value, which is what makes a reused frame equal a cold one.
 
-use glam::Vec3;
+use glam::{IVec3, Vec3};
+use rayon::prelude::*;
+use rustc_hash::FxHashMap;
 
-use super::masks::{join, BRICK_NODES};
+use super::masks::{join, BRICK_EDGE, BRICK_NODES};
 use super::LightMesh;
 use crate::accel::Ray;
 use crate::render::light::{LightSource, RenderLight};
+
+/// Bricks along each edge of a group culled as one.
+const GROUP_EDGE: i32 = 8;
 
 /// A box of render space whose geometry changed between two frames.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -85,7 +92,8 @@ enum ShadowVolume {
     Cone {
         apex: Vec3,
         axis: Vec3,
-        half_angle: f32,
+        sin_half_angle: f32,
+        cos_half_angle: f32,
     },
     Cylinder {
         centre: Vec3,
@@ -109,10 +117,12 @@ impl ShadowVolume {
                 if distance <= radius {
                     return ShadowVolume::Everywhere;
                 }
+                let sin_half_angle = radius / distance;
                 ShadowVolume::Cone {
                     apex: position,
                     axis: to_region / distance,
-                    half_angle: (radius / distance).asin(),
+                    sin_half_angle,
+                    cos_half_angle: (1.0 - sin_half_angle * sin_half_angle).sqrt(),
                 }
             }
         }
@@ -125,21 +135,22 @@ impl ShadowVolume {
             ShadowVolume::Cone {
                 apex,
                 axis,
-                half_angle,
+                sin_half_angle,
+                cos_half_angle,
             } => {
-                // The sphere meets the cone when its centre's angle from the
-                // axis, less the sphere's angular radius, is within the
-                // cone's half-angle (with a margin for rounding).
+                // In the plane of the axis and the sphere's centre, at `along`
+                // the axis and `across` from it, the centre's distance from
+                // the cone's side line is `across·cos − along·sin` (negative
+                // inside); past the apex the apex itself is nearest. The
+                // sphere may meet the cone when that distance is within its
+                // radius (padded for the rounding of these few products).
                 let offset = centre - apex;
-                let distance = offset.length();
-                if distance <= radius {
-                    return true;
-                }
                 let along = offset.dot(axis);
-                let across = (offset - along * axis).length();
-                let angle = across.atan2(along);
-                let sphere = (radius / distance).asin();
-                angle - sphere <= half_angle + 1e-5
+                let across = (offset.length_squared() - along * along).max(0.0).sqrt();
+                let slack = radius + 1e-5 * (offset.abs().max_element() + radius);
+                let beside = across * cos_half_angle - along * sin_half_angle <= slack;
+                let ahead = across * sin_half_angle + along * cos_half_angle >= 0.0;
+                beside && (ahead || offset.length() <= slack)
             }
             ShadowVolume::Cylinder {
                 centre: region,
@@ -181,7 +192,40 @@ impl LightMesh {
             })
             .collect();
         let lattice = self.lattice;
-        let brick_radius = lattice.h * 7.0 * 3f32.sqrt() * 0.5 * (1.0 + 1e-5);
+        let brick_radius = lattice.h * (BRICK_EDGE - 1) as f32 * 3f32.sqrt() * 0.5 * (1.0 + 1e-5);
+        let group_radius =
+            lattice.h * (GROUP_EDGE * BRICK_EDGE - 1) as f32 * 3f32.sqrt() * 0.5 * (1.0 + 1e-5);
+        let sphere_of = |first: IVec3, last: IVec3| {
+            0.5 * (lattice.node_position(first) + lattice.node_position(last))
+        };
+        // The (light, region) pairs whose volume may reach each group.
+        let mut groups: Vec<IVec3> = self
+            .masks
+            .brick_keys()
+            .map(|brick| brick.div_euclid(IVec3::splat(GROUP_EDGE)))
+            .collect();
+        groups.sort_unstable_by_key(|group| group.to_array());
+        groups.dedup();
+        let group_span = GROUP_EDGE * BRICK_EDGE;
+        let reaching: FxHashMap<IVec3, Vec<(usize, usize)>> = groups
+            .par_iter()
+            .map(|&group| {
+                let first = group * group_span;
+                let centre = sphere_of(first, first + IVec3::splat(group_span - 1));
+                let pairs = volumes
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(light, of_light)| {
+                        of_light
+                            .iter()
+                            .enumerate()
+                            .filter(move |(_, volume)| volume.may_meet(centre, group_radius))
+                            .map(move |(region, _)| (light, region))
+                    })
+                    .collect();
+                (group, pairs)
+            })
+            .collect();
         self.masks.invalidate(|brick, validity| {
             let mut cleared = 0;
             for &light in moved_lights {
@@ -189,20 +233,25 @@ impl LightMesh {
                     cleared += validity.clear_both(slot, light / 64, 1 << (light % 64));
                 }
             }
-            if padded.is_empty() {
+            let pairs = &reaching[&brick.div_euclid(IVec3::splat(GROUP_EDGE))];
+            if pairs.is_empty() {
                 return cleared;
             }
-            let centre = 0.5
-                * (lattice.node_position(join(brick, 0))
-                    + lattice.node_position(join(brick, BRICK_NODES - 1)));
-            for (index, light) in lights.iter().enumerate() {
+            let centre = sphere_of(join(brick, 0), join(brick, BRICK_NODES - 1));
+            let mut near: Vec<&ChangedRegion> = Vec::new();
+            // Pairs come grouped by light.
+            for run in pairs.chunk_by(|a, b| a.0 == b.0) {
+                let index = run[0].0;
+                let light = &lights[index];
                 let (word, bit) = (index / 64, 1u64 << (index % 64));
-                let near: Vec<&ChangedRegion> = padded
-                    .iter()
-                    .zip(&volumes[index])
-                    .filter(|(_, volume)| volume.may_meet(centre, brick_radius))
-                    .map(|(region, _)| region)
-                    .collect();
+                near.clear();
+                near.extend(
+                    run.iter()
+                        .filter(|&&(_, region)| {
+                            volumes[index][region].may_meet(centre, brick_radius)
+                        })
+                        .map(|&(_, region)| &padded[region]),
+                );
                 if near.is_empty() {
                     continue;
                 }

@@ -18,7 +18,7 @@ use glam::IVec3;
 use rustc_hash::FxHashMap;
 
 /// Nodes along each edge of a brick.
-const BRICK_EDGE: i32 = 8;
+pub const BRICK_EDGE: i32 = 8;
 /// Nodes in a brick; a node's slot in its brick is in `0..BRICK_NODES`.
 pub const BRICK_NODES: usize = (BRICK_EDGE * BRICK_EDGE * BRICK_EDGE) as usize;
 
@@ -231,6 +231,11 @@ impl MaskStore {
             .sum()
     }
 
+    /// The coordinates of every brick held, in no particular order.
+    pub fn brick_keys(&self) -> impl Iterator<Item = IVec3> + '_ {
+        self.bricks.keys().copied()
+    }
+
     pub fn has_brick(&self, brick: IVec3) -> bool {
         self.bricks.contains_key(&brick)
     }
@@ -256,6 +261,25 @@ impl MaskStore {
                 node[valid.clone()]
                     .iter()
                     .map(|w| w.count_ones() as u64)
+                    .sum::<u64>()
+            })
+            .sum()
+    }
+
+    /// (node, light) pairs whose visibility is known (see
+    /// [`NodeMask::valid`]): what the next frame can reuse.
+    pub fn known_bits(&self) -> u64 {
+        let stride = GROUPS * self.words;
+        self.bricks
+            .values()
+            .flat_map(|bits| bits.chunks(stride))
+            .map(|node| {
+                let mask = NodeMask {
+                    bits: node,
+                    words: self.words,
+                };
+                (0..self.words)
+                    .map(|word| mask.valid(word).count_ones() as u64)
                     .sum::<u64>()
             })
             .sum()

@@ -68,6 +68,9 @@ pub struct LightMeshStats {
     /// Of those, segments answered by the triangle that blocked the
     /// previous node's segment to the same light, without a tree walk.
     pub fill_remembered: u64,
+    /// (node, light) bits known after the frame: the cache the next frame
+    /// draws on.
+    pub bits_cached: u64,
     /// Nodes with any valid bit after the frame.
     pub nodes_cached: u64,
     /// Mean nodes per shading point after steps 1–2.
