@@ -9,11 +9,13 @@
 //! 10th frame cold, and prints per-frame rows and a Markdown summary for
 //! BENCHMARKS.md. `LMANIM_BENCH_FRAMES=A..B` picks the frames,
 //! `LMANIM_BENCH_COLD_EVERY=N` the cold sample (0 for none),
-//! `LMANIM_BENCH_SIZE=WxH` overrides the size.
+//! `LMANIM_BENCH_SIZE=WxH` overrides the size, `LMANIM_BENCH_CLIP=NAME`
+//! plays one clip ("Traffic": the cars alone, under a still camera).
 
 use std::path::Path;
 use std::time::Instant;
 
+use lmanim::anim::pose::ClipSelection;
 use lmanim::backend::CpuBackend;
 use lmanim::schedule::{FrameSet, Timeline};
 use lmanim::sequence::Sequence;
@@ -38,7 +40,8 @@ fn main() {
     let backend = CpuBackend::new(settings.threads).expect("thread pool");
     let timeline = Timeline { fps: settings.fps };
     println!(
-        "{SCENE}: {}x{} {}, {} threads, frames {}..={}",
+        "{SCENE} (clip {}): {}x{} {}, {} threads, frames {}..={}",
+        std::env::var("LMANIM_BENCH_CLIP").unwrap_or_else(|_| "all".into()),
         settings.width,
         settings.height,
         settings.method,
@@ -149,6 +152,10 @@ fn percent(part: u64, whole: u64) -> f64 {
 fn load() -> Sequence {
     let mut sequence = Sequence::load(Path::new(SCENE)).expect("city loads");
     sequence.set_cache_dir(None);
+    if let Ok(clip) = std::env::var("LMANIM_BENCH_CLIP") {
+        let clips = ClipSelection::parse(sequence.scene(), &clip).expect("a clip of the city");
+        sequence.set_clips(clips);
+    }
     sequence
 }
 

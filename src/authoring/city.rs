@@ -115,8 +115,9 @@ impl Layout {
     }
 }
 
-/// Builds the city block of `params`; its motion, if any, is one clip
-/// named "City".
+/// Builds the city block of `params`. Its motion is three clips that play
+/// together by default and can be rendered alone (`--clip`): "Traffic"
+/// (the cars), "Wind" (the trees) and "Flythrough" (the camera).
 pub fn city_block(params: &CityParams) -> Result<GltfBuilder, AuthoringError> {
     let mut b = GltfBuilder::new();
     let layout = Layout {
@@ -126,16 +127,23 @@ pub fn city_block(params: &CityParams) -> Result<GltfBuilder, AuthoringError> {
     add_buildings(&mut b, layout, params.facade_detail)?;
     add_lamps(&mut b, layout, params)?;
     add_street_camera(&mut b, layout)?;
-    let mut channels = add_cars(&mut b, layout, params.cars)?;
-    channels.extend(add_trees(&mut b, layout, params.trees)?);
-    if params.flythrough {
-        channels.extend(add_flythrough(&mut b, layout)?);
-    }
-    if !channels.is_empty() {
-        b.add_animation(&AnimationClip {
-            name: Some("City".into()),
-            channels,
-        })?;
+    let traffic = add_cars(&mut b, layout, params.cars)?;
+    let wind = add_trees(&mut b, layout, params.trees)?;
+    let flythrough = match params.flythrough {
+        true => add_flythrough(&mut b, layout)?,
+        false => Vec::new(),
+    };
+    for (name, channels) in [
+        ("Traffic", traffic),
+        ("Wind", wind),
+        ("Flythrough", flythrough),
+    ] {
+        if !channels.is_empty() {
+            b.add_animation(&AnimationClip {
+                name: Some(name.into()),
+                channels,
+            })?;
+        }
     }
     Ok(b)
 }
