@@ -278,8 +278,12 @@ fn camera_and_colour_changes_invalidate_nothing() {
     assert_eq!(refill.bits_computed, 0);
 }
 
-/// Bits settled a brick at a time by shafts equal the bits single segments
-/// give, in both layers, around a truck that shadows part of the facade.
+/// Bits settled a brick at a time, by shafts (nothing in the way) or by one
+/// wall hiding a whole group, equal the bits single segments give, in both
+/// layers: around a truck that shadows part of the facade, for lamps
+/// behind the facade, hiding whole bricks, cutting bricks with its top edge
+/// or casting the diagonal between its two triangles across a brick, and
+/// for one whose shadow edge crosses bricks below their first node.
 #[test]
 fn shaft_settled_bits_equal_single_segments() {
     let street = Street::new();
@@ -287,9 +291,25 @@ fn shaft_settled_bits_equal_single_segments() {
     let lights = vec![
         lamp(Vec3::new(0.0, 5.0, 0.0)),
         lamp(Vec3::new(27.0, 5.0, 8.0)),
+        lamp(Vec3::new(40.0, 5.0, 0.0)),
+        lamp(Vec3::new(31.0, 20.0, 0.0)),
+        // Under the ground and past its far edge: the ground hides a
+        // brick's lowest nodes from it, not its highest.
+        lamp(Vec3::new(20.0, -0.5, 60.0)),
     ];
     let lattice = Lattice::new(H);
-    let demand = facade_demand(&lattice, lights.len());
+    let mut demand = facade_demand(&lattice, lights.len());
+    // Nodes whose shadows from the lamp at x = 40 straddle the facade's
+    // diagonal, y = 6 + 0.6 z.
+    let diagonal = ((Vec3::new(29.5, 6.0, 0.0) - lattice.origin) / lattice.h)
+        .floor()
+        .as_ivec3();
+    demand.bricks.push(BrickDemand {
+        brick: split(diagonal).0,
+        needed: vec![(1 << lights.len()) - 1; BRICK_NODES].into_boxed_slice(),
+    });
+    demand.bricks.sort_by_key(|b| b.brick.to_array());
+    demand.bricks.dedup_by_key(|b| b.brick);
     let mut filled = mesh(lights.len());
     let mut stats = LightMeshStats::default();
     filled.fill(&demand, &lights, &world, &mut stats).unwrap();
@@ -312,8 +332,12 @@ fn shaft_settled_bits_equal_single_segments() {
     assert!(blocked > 50, "the truck and the facade block some segments");
     assert!(stats.fill_shafts > 0);
     assert!(
-        stats.fill_segments < stats.bits_computed / 2,
-        "shafts settled most bits: {} segments for {} bits",
+        stats.fill_hidden_groups > 0,
+        "the facade hides whole bricks"
+    );
+    assert!(
+        stats.fill_segments < stats.bits_computed * 3 / 5,
+        "shafts and walls settled many bits: {} segments for {} bits",
         stats.fill_segments,
         stats.bits_computed
     );

@@ -74,6 +74,11 @@ impl MeshHit {
     }
 }
 
+/// How far inside a triangle and its segments [`MeshBvh::crosses_well_inside`]
+/// wants every crossing: far above the rounding of the watertight test
+/// (about 1e-7 relative), far below the scale of a wall seen from a brick.
+pub const HIDING_MARGIN: f32 = 1e-4;
+
 pub struct MeshBvh {
     tree: Tree,
     /// Vertices in primitive-slot order.
@@ -215,6 +220,35 @@ impl MeshBvh {
             found.is_none()
         });
         found
+    }
+
+    /// Whether the triangle in `slot` crosses every segment of `rays` well
+    /// inside its edges and well inside the segment: every barycentric
+    /// coordinate and `t / t_max` at least [`HIDING_MARGIN`] from its limit.
+    ///
+    /// For the segments from the eight corners of a box to one point, this
+    /// proves that the triangle hides the whole box from that point: the
+    /// points whose segment crosses a triangle (its shadow volume) form a
+    /// convex set, so with the corners the box lies inside it, and the
+    /// margins keep the rounded test of any segment from inside the box a
+    /// hit as well.
+    pub fn crosses_well_inside(&self, slot: u32, rays: &[Ray]) -> bool {
+        let Some([a, b, c]) = self.vertices.get(slot as usize) else {
+            return false;
+        };
+        rays.iter().all(|ray| {
+            let exact = WatertightRay::new(ray.origin, ray.direction, ray.t_max);
+            exact.intersect(a, b, c).is_some_and(|hit| {
+                let weights = [
+                    hit.barycentric.x,
+                    hit.barycentric.y,
+                    1.0 - hit.barycentric.x - hit.barycentric.y,
+                ];
+                let along = hit.t / ray.t_max;
+                weights.iter().all(|&w| w >= HIDING_MARGIN)
+                    && (HIDING_MARGIN..=1.0 - HIDING_MARGIN).contains(&along)
+            })
+        })
     }
 
     /// Whether no triangle may meet `shaft` (see [`Shaft`]). A binary tree

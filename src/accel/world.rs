@@ -184,6 +184,14 @@ impl World {
             .map(StaticTriangle)
     }
 
+    /// Whether the static triangle crosses every segment of `rays` well
+    /// inside its edges and the segment (see
+    /// [`MeshBvh::crosses_well_inside`]): given the segments from a box's
+    /// corners to a light, the triangle hides the whole box from it.
+    pub fn static_triangle_hides(&self, triangle: StaticTriangle, rays: &[Ray]) -> bool {
+        self.static_bvh.crosses_well_inside(triangle.0, rays)
+    }
+
     /// Whether a dynamic object lies on the ray in `(0, t_max)`.
     pub fn occluded_dynamic(&self, ray: &Ray) -> bool {
         let mut hit = false;

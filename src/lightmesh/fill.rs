@@ -12,7 +12,10 @@
 //! shafts into octants was measured: more queries than the segments they
 //! save.) Shafts only ever settle "nothing in the way", conservatively, so
 //! the bits are exactly those the segments give. A blocked segment's
-//! triangle is remembered and tried first on the group's next segment. A world without dynamic
+//! triangle is remembered and tried first on the group's next segment; when
+//! it hides all eight corners of the group's box from the light, well inside
+//! its edges, it hides every node of the group (its shadow volume is
+//! convex), and the group is settled blocked at once. A world without dynamic
 //! objects settles the dynamic layer without any query.
 
 use rayon::prelude::*;
@@ -23,7 +26,7 @@ use super::{LightMesh, LightMeshError, LightMeshStats};
 use glam::Vec3;
 
 use crate::accel::shaft::Shaft;
-use crate::accel::World;
+use crate::accel::{StaticTriangle, World};
 use crate::render::light::RenderLight;
 
 /// Bits computed for one brick, laid out like the demand's table.
@@ -42,6 +45,8 @@ struct FillWork {
     shafts: u64,
     segments: u64,
     remembered: u64,
+    /// Groups whose box one remembered triangle hides whole.
+    hidden_groups: u64,
 }
 
 /// Fewer nodes than this are cheaper to trace one by one than by a shaft.
@@ -100,12 +105,13 @@ impl LayerTest<'_> {
         blocked: &mut [u64],
         work: &mut FillWork,
     ) {
-        if let (Some(apex), true) = (light.position(), members.len() >= MIN_SHAFT_NODES) {
-            let (min, max) = members
-                .iter()
-                .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &i| {
-                    (lo.min(positions[i]), hi.max(positions[i]))
-                });
+        let (min, max) = members
+            .iter()
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &i| {
+                (lo.min(positions[i]), hi.max(positions[i]))
+            });
+        let grouped = members.len() >= MIN_SHAFT_NODES;
+        if let (Some(apex), true) = (light.position(), grouped) {
             work.shafts += 1;
             if self
                 .layer
@@ -116,15 +122,25 @@ impl LayerTest<'_> {
         }
         // A shadow cache: the brick's nodes sit side by side, so the wall
         // that hides the light from one of them usually hides it from the
-        // next; its triangle is tried before the tree is walked.
+        // next; its triangle is tried before the tree is walked, and first
+        // against the corners of the group's box, which it may hide whole.
         let mut remembered = None;
-        for &i in members {
+        for (order, &i) in members.iter().enumerate() {
             work.segments += 1;
             let ray = light.shadow_ray(positions[i]);
             let occluded = match self.layer {
                 Layer::Static => {
                     let occluder = self.world.static_occluder(&ray, remembered);
                     work.remembered += u64::from(occluder.is_some() && occluder == remembered);
+                    if let (0, Some(wall), true) = (order, occluder, grouped) {
+                        if self.hides_box(wall, light, min, max) {
+                            work.hidden_groups += 1;
+                            for &member in members {
+                                blocked[member] |= bit;
+                            }
+                            return;
+                        }
+                    }
                     remembered = occluder.or(remembered);
                     occluder.is_some()
                 }
@@ -134,6 +150,16 @@ impl LayerTest<'_> {
                 blocked[i] |= bit;
             }
         }
+    }
+
+    /// Whether one static triangle hides the box `min..max` from `light`.
+    fn hides_box(&self, wall: StaticTriangle, light: &RenderLight, min: Vec3, max: Vec3) -> bool {
+        let corners: [crate::accel::Ray; 8] = std::array::from_fn(|corner| {
+            let pick = |axis: usize| (corner >> axis) & 1 == 1;
+            let at = Vec3::select(glam::BVec3::new(pick(0), pick(1), pick(2)), max, min);
+            light.shadow_ray(at)
+        });
+        self.world.static_triangle_hides(wall, &corners)
     }
 }
 
@@ -161,6 +187,7 @@ impl LightMesh {
             stats.fill_shafts += filled.work.shafts;
             stats.fill_segments += filled.work.segments;
             stats.fill_remembered += filled.work.remembered;
+            stats.fill_hidden_groups += filled.work.hidden_groups;
             if filled.bits_computed > 0 {
                 self.masks.merge_brick(brick.brick, &filled.update);
             }

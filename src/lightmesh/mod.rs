@@ -68,6 +68,9 @@ pub struct LightMeshStats {
     /// Of those, segments answered by the triangle that blocked the
     /// previous node's segment to the same light, without a tree walk.
     pub fill_remembered: u64,
+    /// Groups of a brick's nodes settled blocked at once: the triangle that
+    /// blocked the first one hides the corners of their box.
+    pub fill_hidden_groups: u64,
     /// (node, light) bits known after the frame: the cache the next frame
     /// draws on.
     pub bits_cached: u64,
