@@ -200,15 +200,24 @@ impl Timeline {
 /// work of the next one: moved objects update the world's top level,
 /// deformed ones refit their own structure, moved objects and lights
 /// invalidate light-mesh bits, and a frame where nothing changed is copied.
+/// Light colour, intensity, range and cones, the camera's projection and
+/// material factors change the image but no visibility, so they invalidate
+/// nothing.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct FrameDelta {
+    /// The camera's placement or projection (field of view, far plane)
+    /// changed.
     pub camera_moved: bool,
     /// Lights (indices into `FrameScene::lights`) whose position or
     /// direction changed: their mask bits are stale.
     pub lights_moved: Vec<usize>,
     /// Some light changed colour, intensity, range or cone: the image
-    /// changes, no mask bit does.
+    /// changes, no mask bit does. (Range and cones decide which lights a
+    /// point asks the light mesh for, not what a node's bit says; a bit
+    /// first asked for after a change is computed then.)
     pub lights_changed: bool,
+    /// Some material factor changed: the image changes, nothing else.
+    pub materials_changed: bool,
     /// Objects (indices into `FrameScene::objects`) moved rigidly.
     pub objects_moved: Vec<usize>,
     /// Objects whose mesh deformed (skins, morph targets).
@@ -225,6 +234,7 @@ impl FrameDelta {
             camera_moved: true,
             lights_moved: (0..frame.lights.len()).collect(),
             lights_changed: true,
+            materials_changed: true,
             objects_moved: frame
                 .objects
                 .iter()
@@ -255,6 +265,7 @@ impl FrameDelta {
             camera_moved: before.camera != after.camera,
             lights_moved: pairs().filter_map(moved_light).collect(),
             lights_changed: pairs().any(|(_, (a, b))| a != b),
+            materials_changed: before.materials != after.materials,
             objects_moved: (0..after.objects.len())
                 .filter(|&i| before.objects[i].to_render != after.objects[i].to_render)
                 .collect(),
@@ -268,6 +279,7 @@ impl FrameDelta {
     pub fn is_still(&self) -> bool {
         !self.camera_moved
             && !self.lights_changed
+            && !self.materials_changed
             && self.objects_moved.is_empty()
             && self.objects_deformed.is_empty()
     }

@@ -1,13 +1,11 @@
 //! Animated files import as the authoring builder wrote them: clips,
 //! skins, every JOINTS_n/WEIGHTS_n set (normalised) and morph targets with
-//! default weights; KHR_animation_pointer channels are dropped, not the
-//! file.
+//! default weights. (KHR_animation_pointer channels: `anim_pointer.rs`.)
 
 mod anim_support;
 
 use lmanim::authoring::{shapes, GltfBuilder, NodeDesc, Primitive};
 use lmanim::scene::{Interpolation, JointSet, Skin, Target};
-use serde_json::{json, Value};
 
 #[test]
 fn clips_skins_and_morph_targets_import_as_written() {
@@ -108,31 +106,4 @@ fn joint_sets_beyond_the_first_are_read_and_weights_normalised() {
     assert_eq!(sets[0].weights[3], [1.0, 0.0, 0.0, 0.0]);
     assert_eq!(sets[1].weights[3], [0.0; 4]);
     assert_eq!(sets[0].joints[3], [1, 0, 0, 0]);
-}
-
-#[test]
-fn animation_pointer_channels_are_dropped_with_the_rest_imported() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let written = anim_support::interpolations(dir.path());
-    let mut doc: Value =
-        serde_json::from_slice(&std::fs::read(&written).expect("read")).expect("JSON");
-    let channels = doc["animations"][0]["channels"]
-        .as_array_mut()
-        .expect("channels");
-    let before = channels.len();
-    // Light intensity driven by the first channel's sampler (its output is
-    // not a scalar, but the channel is dropped unread).
-    channels.push(json!({ "sampler": 0, "target": { "path": "pointer",
-        "extensions": { "KHR_animation_pointer": {
-            "pointer": "/extensions/KHR_lights_punctual/lights/0/intensity" } } } }));
-    doc["extensionsUsed"]
-        .as_array_mut()
-        .expect("extensionsUsed")
-        .push(json!("KHR_animation_pointer"));
-    let path = dir.path().join("pointer.gltf");
-    std::fs::write(&path, doc.to_string()).expect("write");
-
-    let scene = lmanim::import::load(&path).expect("imports despite the pointer channel");
-    assert_eq!(scene.animations[0].channels.len(), before);
-    assert_eq!(scene.lights.len(), 1);
 }

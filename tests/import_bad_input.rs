@@ -217,6 +217,7 @@ fn corpus(dir: &Path) -> Vec<Case> {
         "image 0",
     ));
     cases.extend(animation_cases(dir));
+    cases.extend(pointer_cases(dir));
     cases
 }
 
@@ -353,6 +354,56 @@ fn animation_cases(dir: &Path) -> Vec<Case> {
                 doc["nodes"][0]["weights"] = json!([0.5]);
             }),
             "node 0 has 1 weights",
+        ),
+    ]
+}
+
+/// KHR_animation_pointer channels that cannot be read. (Pointers lmanim
+/// does not animate are skipped with a warning: see `anim_pointer.rs`.)
+fn pointer_cases(dir: &Path) -> Vec<Case> {
+    let case = |path: PathBuf, fault_word| Case { path, fault_word };
+    let pointers =
+        |name, edit: fn(&mut Value)| edited_model(dir, name, anim_support::pointers, edit);
+    vec![
+        // The base colour (VEC4) read from the colour's VEC3 sampler.
+        case(
+            pointers("pointer_wrong_width.gltf", |doc| {
+                doc["animations"][0]["channels"][5]["sampler"] = json!(0);
+            }),
+            "animation 0 sampler 0, read by channel 5",
+        ),
+        case(
+            pointers("pointer_scalar_for_colour.gltf", |doc| {
+                let scalar = doc["animations"][0]["samplers"][1]["output"].clone();
+                doc["animations"][0]["samplers"][0]["output"] = scalar;
+            }),
+            "SCALAR of FLOAT, expected VEC3",
+        ),
+        case(
+            pointers("pointer_missing_sampler.gltf", |doc| {
+                doc["animations"][0]["channels"][2]["sampler"] = json!(9);
+            }),
+            "animation 0 channel 2: names sampler 9, but the animation has 6",
+        ),
+        case(
+            pointers("pointer_output_past_accessors.gltf", |doc| {
+                doc["animations"][0]["samplers"][3]["output"] = json!(999);
+            }),
+            "samplers[3].output",
+        ),
+        case(
+            pointers("pointer_without_pointer.gltf", |doc| {
+                doc["animations"][0]["channels"][4]["target"] = json!({ "path": "pointer" });
+            }),
+            "channel 4: has path \"pointer\" but no KHR_animation_pointer pointer",
+        ),
+        // Three STEP intensities for the colour's two key times.
+        case(
+            pointers("pointer_too_few_keys.gltf", |doc| {
+                let times = doc["animations"][0]["samplers"][0]["input"].clone();
+                doc["animations"][0]["samplers"][1]["input"] = times;
+            }),
+            "animation 0 channel 1: sampler 1 has 3 output values for 2 keys",
         ),
     ]
 }
@@ -506,14 +557,37 @@ fn randomly_corrupted_files_never_panic() {
         .filter(|&i| original[i].is_ascii_digit())
         .collect();
 
+    let panics = corruption_panics(&original, &digits, &dir.path().join("corrupt.glb"));
+    assert!(panics.is_empty(), "{}", panics.join("\n"));
+}
+
+#[test]
+fn randomly_corrupted_pointer_channels_never_panic() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let original = std::fs::read(anim_support::pointers(dir.path())).expect("read");
+    // The digits of the JSON's structure: the embedded buffer's base64 is
+    // data, which other tests corrupt.
+    let text = String::from_utf8_lossy(&original);
+    let buffer_start = text.find("data:").expect("embedded buffer");
+    let buffer_end = buffer_start + text[buffer_start..].find('"').expect("end of the URI");
+    let digits: Vec<usize> = (0..original.len())
+        .filter(|&i| original[i].is_ascii_digit() && !(buffer_start..buffer_end).contains(&i))
+        .collect();
+    let panics = corruption_panics(&original, &digits, &dir.path().join("corrupt.gltf"));
+    assert!(panics.is_empty(), "{}", panics.join("\n"));
+}
+
+/// Imports 600 corruptions of `original` written to `path`, half changing
+/// one to three of its `digits` into other digits (still JSON, different
+/// counts, offsets, lengths and indices), half setting random bytes; the
+/// errors that are panics.
+fn corruption_panics(original: &[u8], digits: &[usize], path: &Path) -> Vec<String> {
     let mut rng = XorShift(0x2545_f491_4f6c_dd1d);
     let mut panics = Vec::new();
     for trial in 0..600 {
-        let mut bytes = original.clone();
+        let mut bytes = original.to_vec();
         for _ in 0..1 + rng.below(3) {
             if trial % 2 == 0 {
-                // A digit of the JSON becomes another digit: still JSON,
-                // different counts, offsets, lengths and indices.
                 let at = digits[rng.below(digits.len())];
                 bytes[at] = b'0' + rng.below(10) as u8;
             } else {
@@ -521,12 +595,12 @@ fn randomly_corrupted_files_never_panic() {
                 bytes[at] = rng.below(256) as u8;
             }
         }
-        let path = write(dir.path(), "corrupt.glb", &bytes);
-        if let Err(error) = lmanim::import::load(&path) {
+        std::fs::write(path, &bytes).expect("write");
+        if let Err(error) = lmanim::import::load(path) {
             if matches!(error.fault, lmanim::import::Fault::Panic(_)) {
                 panics.push(format!("trial {trial}: {error}"));
             }
         }
     }
-    assert!(panics.is_empty(), "{}", panics.join("\n"));
+    panics
 }

@@ -2,7 +2,9 @@
 //! same frames rendered cold, bit for bit — with a truck passing between a
 //! lamp and a facade more than 15 m from it, a moving light and a moving
 //! camera. Camera-only animation recomputes no bit; a still sequence copies
-//! its frames.
+//! its frames. Animated light colours and intensities, material factors
+//! and fields of view (KHR_animation_pointer) re-render every frame but
+//! invalidate and recompute no bit.
 
 mod common;
 
@@ -10,8 +12,11 @@ use common::*;
 use glam::{DMat4, DVec3, Vec3};
 use lmanim::backend::CpuBackend;
 use lmanim::output::Image;
-use lmanim::scene::animation::AnimationClip;
-use lmanim::scene::{LightKind, Projection, SceneDesc};
+use lmanim::scene::animation::{AnimationClip, Channel, Interpolation, Sampler};
+use lmanim::scene::pose::dynamic_nodes;
+use lmanim::scene::{
+    CameraProperty, LightKind, LightProperty, MaterialProperty, Projection, SceneDesc, Target,
+};
 use lmanim::sequence::Sequence;
 use lmanim::settings::{Method, Settings};
 use lmanim::stats::FrameStats;
@@ -189,5 +194,127 @@ fn a_still_sequence_copies_its_frames() {
         assert!(stats.copied);
         assert_eq!(*image, frames[0].0);
         assert_eq!(stats.shading_points, 0, "nothing was rendered");
+    }
+}
+
+/// `target` keyed at each of [`TIMES`] with `values` (width components
+/// each) under `interpolation`.
+fn keyed(target: Target, interpolation: Interpolation, values: &[f32]) -> Channel {
+    Channel {
+        target,
+        sampler: Sampler {
+            interpolation,
+            times: TIMES.iter().map(|&t| t as f32).collect(),
+            values: values.to_vec(),
+            width: values.len() / TIMES.len(),
+        },
+    }
+}
+
+/// The still street with `channels` playing.
+fn street_animating(channels: Vec<Channel>) -> SceneDesc {
+    let mut scene = street(false, false, false);
+    scene.animations.push(AnimationClip {
+        name: Some("looks".into()),
+        channels,
+    });
+    scene
+}
+
+/// Sums of the red, green and blue channels of an image.
+fn channel_sums(image: &Image) -> [f64; 3] {
+    image.pixels.iter().fold([0.0; 3], |sums, p| {
+        [
+            sums[0] + f64::from(p.x),
+            sums[1] + f64::from(p.y),
+            sums[2] + f64::from(p.z),
+        ]
+    })
+}
+
+/// Frames after the first of a sequence that changes no geometry and no
+/// light position: rendered anew (not copied), each different from the
+/// one before, equal to the same frame rendered cold, and not one mask bit
+/// invalidated or computed again.
+fn assert_re_rendered_with_every_bit_kept(scene: &SceneDesc, frames: &[(Image, FrameStats)]) {
+    let settings = settings_for(Method::Lmm);
+    assert!(frames[0].1.lightmesh.unwrap().bits_computed > 0);
+    for (index, (image, stats)) in frames.iter().enumerate().skip(1) {
+        let time = TIMES[index];
+        assert!(!stats.copied, "re-rendered at t = {time}");
+        assert!(stats.shading_points > 0);
+        assert_eq!((stats.lights_moved, stats.objects_moved), (0, 0));
+        assert_eq!(stats.bits_invalidated, 0, "t = {time}");
+        assert_eq!(stats.lightmesh.unwrap().bits_computed, 0, "t = {time}");
+        assert_ne!(
+            *image,
+            frames[index - 1].0,
+            "the picture changes at t = {time}"
+        );
+        assert_eq!(*image, rendered_cold(scene, &settings, time), "t = {time}");
+    }
+}
+
+#[test]
+fn light_colour_animation_re_renders_but_invalidates_and_recomputes_nothing() {
+    // The second lamp, which lights most of the view, turns from white to
+    // orange-red (LINEAR) and steps its intensity; nothing else changes.
+    let scene = street_animating(vec![
+        keyed(
+            Target::Light(1, LightProperty::Color),
+            Interpolation::Linear,
+            &[1.0, 1.0, 1.0, 1.0, 0.8, 0.6, 1.0, 0.5, 0.3, 1.0, 0.3, 0.1],
+        ),
+        keyed(
+            Target::Light(1, LightProperty::Intensity),
+            Interpolation::Step,
+            &[200.0, 150.0, 250.0, 300.0],
+        ),
+    ]);
+    let frames = rendered_in_sequence(&scene, &settings_for(Method::Lmm));
+    for (_, stats) in &frames[1..] {
+        assert!(!stats.camera_moved);
+    }
+    assert_re_rendered_with_every_bit_kept(&scene, &frames);
+    // White light on grey gives grey; by the end the lamp is orange-red.
+    let [r0, g0, b0] = channel_sums(&frames[0].0);
+    assert!((r0 - g0).abs() < 1e-3 * r0 && (g0 - b0).abs() < 1e-3 * g0);
+    let [r, g, b] = channel_sums(&frames[3].0);
+    assert!(r > 1.5 * g && g > 1.5 * b, "{r} {g} {b}");
+}
+
+#[test]
+fn material_animation_re_renders_but_invalidates_nothing_and_moves_nothing() {
+    let scene = street_animating(vec![keyed(
+        Target::Material(0, MaterialProperty::BaseColor),
+        Interpolation::Linear,
+        &[
+            0.6, 0.6, 0.6, 1.0, 0.7, 0.4, 0.4, 1.0, 0.8, 0.3, 0.2, 1.0, 0.9, 0.2, 0.1, 1.0,
+        ],
+    )]);
+    // A material change makes no object dynamic: the world stays static.
+    assert!(dynamic_nodes(&scene).iter().all(|&dynamic| !dynamic));
+    let frames = rendered_in_sequence(&scene, &settings_for(Method::Lmm));
+    for (_, stats) in &frames[1..] {
+        assert!(!stats.camera_moved);
+    }
+    assert_re_rendered_with_every_bit_kept(&scene, &frames);
+}
+
+#[test]
+fn field_of_view_animation_moves_the_camera_and_invalidates_nothing() {
+    let scene = street_animating(vec![keyed(
+        Target::Camera(0, CameraProperty::Yfov),
+        Interpolation::Linear,
+        &[0.9, 0.8, 0.7, 0.6],
+    )]);
+    let settings = settings_for(Method::Lmm);
+    let frames = rendered_in_sequence(&scene, &settings);
+    for (index, (image, stats)) in frames.iter().enumerate().skip(1) {
+        let time = TIMES[index];
+        assert!(stats.camera_moved && !stats.copied, "t = {time}");
+        assert_eq!(stats.bits_invalidated, 0, "t = {time}");
+        assert_ne!(*image, frames[index - 1].0, "t = {time}");
+        assert_eq!(*image, rendered_cold(&scene, &settings, time), "t = {time}");
     }
 }

@@ -1,6 +1,7 @@
 //! The report `lmanim inspect` prints: the pose at chosen times, as plain
 //! numbers (local TRS, world matrices, morph weights, lights and cameras in
-//! world space), so that animation can be checked without rendering and
+//! world space with their animated values, and material factors when a clip
+//! animates them), so that animation can be checked without rendering and
 //! compared with other players.
 
 use glam::{DMat4, DVec3};
@@ -8,7 +9,7 @@ use serde::Serialize;
 
 use super::pose::{ClipSelection, LocalPose};
 use crate::scene::pose::Pose;
-use crate::scene::{LightKind, Projection, SceneDesc};
+use crate::scene::{LightKind, Material, Projection, SceneDesc, Target};
 
 /// Poses at several times.
 #[derive(Clone, Debug, Serialize)]
@@ -24,6 +25,10 @@ pub struct PoseReport {
     pub nodes: Vec<NodeReport>,
     pub lights: Vec<LightReport>,
     pub cameras: Vec<CameraReport>,
+    /// Every material, only when a playing clip animates some material's
+    /// factors (KHR_animation_pointer).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub materials: Option<Vec<MaterialReport>>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -56,6 +61,11 @@ pub struct LightReport {
     pub color: [f32; 3],
     pub intensity: f32,
     pub range: Option<f32>,
+    /// Cone angles in radians (spot lights only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub inner_cone_angle: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub outer_cone_angle: Option<f32>,
 }
 
 /// A camera placed in the world, looking along `direction` with `up`.
@@ -81,6 +91,38 @@ pub struct CameraReport {
     pub ymag: Option<f32>,
     pub znear: f32,
     pub zfar: Option<f32>,
+}
+
+/// A material's factors at one time.
+#[derive(Clone, Debug, Serialize)]
+pub struct MaterialReport {
+    pub index: usize,
+    pub name: Option<String>,
+    /// Linear RGBA.
+    pub base_color: [f32; 4],
+    pub metallic: f32,
+    pub roughness: f32,
+    /// Linear RGB.
+    pub emissive: [f32; 3],
+    pub transmission: f32,
+    pub ior: f32,
+    pub specular: f32,
+}
+
+impl MaterialReport {
+    fn of(index: usize, material: &Material) -> MaterialReport {
+        MaterialReport {
+            index,
+            name: material.name.clone(),
+            base_color: material.base_color.to_array(),
+            metallic: material.metallic,
+            roughness: material.roughness,
+            emissive: material.emissive.to_array(),
+            transmission: material.transmission,
+            ior: material.ior,
+            specular: material.specular,
+        }
+    }
 }
 
 /// The scene posed by `clips` at each of `times`.
@@ -113,8 +155,15 @@ fn report(scene: &SceneDesc, clips: ClipSelection, time: f64) -> PoseReport {
         .collect();
     let lights = placed(scene, |node| node.light)
         .filter_map(|(node, light)| {
-            let desc = scene.lights.get(light)?;
+            let desc = pose.properties.lights.get(light)?;
             let (position, direction, _) = frame(&pose.world[node]);
+            let cones = match desc.kind {
+                LightKind::Spot {
+                    inner_cone,
+                    outer_cone,
+                } => Some((inner_cone, outer_cone)),
+                LightKind::Point | LightKind::Directional => None,
+            };
             Some(LightReport {
                 node,
                 light,
@@ -129,12 +178,15 @@ fn report(scene: &SceneDesc, clips: ClipSelection, time: f64) -> PoseReport {
                 color: desc.color.to_array(),
                 intensity: desc.intensity,
                 range: desc.range,
+                inner_cone_angle: cones.map(|(inner, _)| inner),
+                outer_cone_angle: cones.map(|(_, outer)| outer),
             })
         })
         .collect();
     let cameras = placed(scene, |node| node.camera)
         .filter_map(|(node, camera)| {
             let desc = scene.cameras.get(camera)?;
+            let projection = *pose.properties.cameras.get(camera)?;
             let (position, direction, up) = frame(&pose.world[node]);
             let mut report = CameraReport {
                 node,
@@ -151,7 +203,7 @@ fn report(scene: &SceneDesc, clips: ClipSelection, time: f64) -> PoseReport {
                 znear: 0.0,
                 zfar: None,
             };
-            match desc.projection {
+            match projection {
                 Projection::Perspective {
                     yfov,
                     aspect_ratio,
@@ -179,11 +231,21 @@ fn report(scene: &SceneDesc, clips: ClipSelection, time: f64) -> PoseReport {
             Some(report)
         })
         .collect();
+    let animates_materials = clips
+        .clips(scene)
+        .flat_map(|clip| &clip.channels)
+        .any(|channel| matches!(channel.target, Target::Material(..)));
+    let materials = animates_materials.then(|| {
+        (pose.properties.materials.iter().enumerate())
+            .map(|(index, material)| MaterialReport::of(index, material))
+            .collect()
+    });
     PoseReport {
         time,
         nodes,
         lights,
         cameras,
+        materials,
     }
 }
 

@@ -1,12 +1,15 @@
 //! A [`Pose`] at time `t`: each node's local TRS with the selected clips'
 //! channels applied over the file's own, composed down the tree; skin joint
-//! matrices and morph weights come with it. This is the step the frame
-//! loop takes once per frame, before anything is compared or rendered.
+//! matrices, morph weights and the lights, cameras and materials that
+//! KHR_animation_pointer channels animate come with it. This is the step
+//! the frame loop takes once per frame, before anything is compared or
+//! rendered.
 
 use glam::{DMat4, DQuat, DVec3};
 
+use super::property;
 use super::sample::{sample, Values};
-use crate::scene::pose::{default_weights, Pose};
+use crate::scene::pose::{default_weights, Pose, Properties};
 use crate::scene::{AnimationClip, SceneDesc, Target};
 
 /// Which clips play. glTF files often hold one clip per character or
@@ -102,7 +105,8 @@ impl Trs {
     }
 }
 
-/// Every node's local state at one time, before composing down the tree.
+/// Every node's local state at one time, before composing down the tree,
+/// and the animated properties, which need no composing.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LocalPose {
     /// Per node: the TRS, animated or the file's own.
@@ -112,6 +116,7 @@ pub struct LocalPose {
     pub matrices: Vec<DMat4>,
     /// Per node: morph weights, as in [`Pose::weights`].
     pub weights: Vec<Vec<f32>>,
+    pub properties: Properties,
 }
 
 impl LocalPose {
@@ -125,15 +130,22 @@ impl LocalPose {
             .collect();
         let mut animated = vec![false; scene.nodes.len()];
         let mut weights = default_weights(scene);
+        let mut properties = Properties::rest(scene);
         for channel in clips.clips(scene).flat_map(|clip| &clip.channels) {
-            let node = channel.target.node();
+            // Only a node's rotation is a quaternion; everything else,
+            // light colours and material factors included, is a vector.
             let values = match channel.target {
                 Target::Rotation(_) => Values::Rotation,
                 _ => Values::Vector,
             };
-            let (Some(value), Some(local)) =
-                (sample(&channel.sampler, values, t), trs.get_mut(node))
-            else {
+            let Some(value) = sample(&channel.sampler, values, t) else {
+                continue;
+            };
+            let Some(node) = channel.target.node() else {
+                property::apply(&mut properties, channel.target, &value);
+                continue;
+            };
+            let Some(local) = trs.get_mut(node) else {
                 continue;
             };
             match (channel.target, value.as_slice()) {
@@ -164,6 +176,7 @@ impl LocalPose {
             trs,
             matrices,
             weights,
+            properties,
         }
     }
 }
@@ -176,7 +189,7 @@ impl Pose {
 
     /// Composes a sampled [`LocalPose`] down the tree.
     pub fn of_locals(scene: &SceneDesc, local: LocalPose) -> Pose {
-        Pose::from_locals(scene, &local.matrices, local.weights)
+        Pose::from_locals(scene, &local.matrices, local.weights, local.properties)
     }
 }
 

@@ -2,11 +2,14 @@
 //! weights of meshes and animation clips. They are given as the scene
 //! model's types, checked as import checks them (samplers by
 //! [`Sampler::validate`]), so that a written file imports as written.
+//! Channels of lights, cameras and materials are written as
+//! KHR_animation_pointer channels.
 
 use serde_json::{json, Value};
 
-use crate::scene::{AnimationClip, Interpolation, Sampler, Skin, Target};
+use crate::scene::{pointer, AnimationClip, Interpolation, Sampler, Skin, Target, TargetKind};
 
+use super::json::ANIMATION_POINTER;
 use super::{AuthoringError, GltfBuilder, MeshId, SkinId};
 
 impl GltfBuilder {
@@ -80,8 +83,8 @@ impl GltfBuilder {
     }
 
     /// An animation clip; each channel gets a sampler of its own. Target
-    /// nodes must exist already, a weights channel's width must match the
-    /// node's mesh's morph targets.
+    /// nodes, lights, cameras and materials must exist already; a weights
+    /// channel's width must match the node's mesh's morph targets.
     pub fn add_animation(&mut self, clip: &AnimationClip) -> Result<usize, AuthoringError> {
         let name = clip
             .name
@@ -95,19 +98,24 @@ impl GltfBuilder {
             return Err(fault("needs at least one channel".into()));
         }
         for (index, channel) in clip.channels.iter().enumerate() {
-            let node = channel.target.node();
-            let Some(node_object) = self.nodes.get(node) else {
+            let (kind, object) = channel.target.object();
+            let count = match kind {
+                TargetKind::Node => self.nodes.len(),
+                TargetKind::Light => self.lights.len(),
+                TargetKind::Camera => self.cameras.len(),
+                TargetKind::Material => self.materials.len(),
+            };
+            if object >= count {
                 return Err(fault(format!(
-                    "channel {index}: node #{node} is not in this builder"
+                    "channel {index}: {} #{object} is not in this builder",
+                    kind.name()
                 )));
-            };
-            let width = match channel.target {
-                Target::Translation(_) | Target::Scale(_) => 3,
-                Target::Rotation(_) => 4,
-                Target::Weights(_) => node_object["mesh"]
+            }
+            let width = channel.target.width(|node| {
+                self.nodes[node]["mesh"]
                     .as_u64()
-                    .map_or(0, |mesh| self.morph_targets_of(MeshId(mesh as usize))),
-            };
+                    .map_or(0, |mesh| self.morph_targets_of(MeshId(mesh as usize)))
+            });
             if channel.sampler.width != width || width == 0 {
                 return Err(fault(format!(
                     "channel {index}: values of width {} where the target takes {width}",
@@ -123,16 +131,15 @@ impl GltfBuilder {
         let mut channels = Vec::new();
         for channel in &clip.channels {
             samplers.push(self.add_sampler(&channel.sampler, channel.target));
-            let (node, path) = match channel.target {
-                Target::Translation(node) => (node, "translation"),
-                Target::Rotation(node) => (node, "rotation"),
-                Target::Scale(node) => (node, "scale"),
-                Target::Weights(node) => (node, "weights"),
+            let target = match channel.target.node() {
+                Some(node) => json!({ "node": node, "path": pointer::property(channel.target) }),
+                None => {
+                    self.extensions_used.insert(ANIMATION_POINTER);
+                    json!({ "path": "pointer", "extensions": { ANIMATION_POINTER: {
+                        "pointer": pointer::pointer(channel.target) } } })
+                }
             };
-            channels.push(json!({
-                "sampler": channels.len(),
-                "target": { "node": node, "path": path },
-            }));
+            channels.push(json!({ "sampler": channels.len(), "target": target }));
         }
         let mut object = json!({ "channels": channels, "samplers": samplers });
         if let Some(name) = &clip.name {

@@ -14,6 +14,7 @@ pub(super) const LIGHTS_PUNCTUAL: &str = "KHR_lights_punctual";
 pub(super) const TRANSMISSION: &str = "KHR_materials_transmission";
 pub(super) const IOR: &str = "KHR_materials_ior";
 pub(super) const EMISSIVE_STRENGTH: &str = "KHR_materials_emissive_strength";
+pub(super) const ANIMATION_POINTER: &str = "KHR_animation_pointer";
 
 /// The glTF default index of refraction, written only when it differs.
 const DEFAULT_IOR: f32 = 1.5;

@@ -14,7 +14,8 @@
 //! ([`crate::scene::Skin`]), JOINTS_n/WEIGHTS_n and morph targets on a
 //! [`Geometry`], default morph weights on meshes and nodes, and clips
 //! ([`crate::scene::AnimationClip`], every interpolation) whose channels
-//! name nodes by index.
+//! name nodes by index, or lights, cameras and materials, which are written
+//! as KHR_animation_pointer channels.
 
 mod animation;
 mod builder;

@@ -1,111 +1,235 @@
 //! Animation clips: each channel's target and its sampler's keys, read
 //! through the bounds-checked accessor reader and checked as sampling needs
 //! (times finite and strictly increasing, as many values as keys, width and
-//! interpolation call for). Channels of KHR_animation_pointer are not read
-//! here; see `container.rs`.
+//! interpolation call for). Channels name a node and a path, or a
+//! KHR_animation_pointer (taken from the JSON by `container.rs`, see
+//! `pointer.rs`); both kinds are read here alike, in the file's channel
+//! order. A pointer to a property lmanim does not animate, or to an object
+//! the file lacks, skips its channel; the caller reports it.
+
+use std::fmt;
 
 use gltf::animation::{Interpolation as FileInterpolation, Property};
 
 use super::accessor::Use;
 use super::error::Fault;
-use crate::scene::{AnimationClip, Channel, Interpolation, Mesh, Node, Sampler, Target};
+use super::pointer::{PointerChannel, PointerChannels};
+use crate::scene::{
+    AnimationClip, Camera, Channel, Interpolation, Light, Mesh, Node, Sampler, Target,
+};
 
-/// Every animation of the file. `nodes` and `meshes` are the imported
-/// ones: a weights channel has one value per morph target of the node's
-/// mesh.
+/// What channels can target: the scene as imported so far. A target's
+/// index must exist, and a weights channel has one value per morph target
+/// of the node's mesh.
+pub struct Animatable<'a> {
+    pub nodes: &'a [Node],
+    pub meshes: &'a [Mesh],
+    pub lights: &'a [Light],
+    pub cameras: &'a [Camera],
+    /// The file's own materials (not the default one import may append).
+    pub materials: usize,
+}
+
+/// The file's animations and the channels left out of them.
+pub struct Animations {
+    pub clips: Vec<AnimationClip>,
+    pub skipped: Vec<SkippedChannel>,
+}
+
+/// A KHR_animation_pointer channel that import leaves out, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkippedChannel {
+    pub animation: usize,
+    pub channel: usize,
+    pub pointer: String,
+    pub reason: String,
+}
+
+impl fmt::Display for SkippedChannel {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "animation {} channel {}: KHR_animation_pointer {:?} {}; the channel is skipped",
+            self.animation, self.channel, self.pointer, self.reason
+        )
+    }
+}
+
+/// A channel as the file has it: through the glTF crate, or taken out
+/// of the JSON before it.
+enum Source<'d, 'p> {
+    Node(gltf::animation::Channel<'d>),
+    Pointer(&'p PointerChannel),
+}
+
+/// Every animation of the file.
 pub fn import(
     document: &gltf::Document,
     buffers: &[Vec<u8>],
-    nodes: &[Node],
-    meshes: &[Mesh],
-) -> Result<Vec<AnimationClip>, Fault> {
-    document
-        .animations()
-        .map(|animation| {
-            let channels = animation
-                .channels()
-                .enumerate()
-                .map(|(c, channel)| {
-                    let fault = |problem: String| Fault::Animation {
-                        animation: animation.index(),
-                        channel: c,
-                        problem,
+    pointers: &PointerChannels,
+    scene: &Animatable,
+) -> Result<Animations, Fault> {
+    let mut skipped = Vec::new();
+    let mut clips = Vec::new();
+    for animation in document.animations() {
+        let a = animation.index();
+        let mut channels = Vec::new();
+        for (c, source) in file_order(&animation, pointers.of(a)).enumerate() {
+            let fault = |problem: String| Fault::Animation {
+                animation: a,
+                channel: c,
+                problem,
+            };
+            let (target, sampler, pointer) = match source {
+                Source::Node(channel) => (node_target(&channel), channel.sampler(), None),
+                Source::Pointer(channel) => {
+                    let target = match channel.target(scene) {
+                        Ok(target) => target,
+                        Err(reason) => {
+                            skipped.push(SkippedChannel {
+                                animation: a,
+                                channel: c,
+                                pointer: channel.pointer.clone(),
+                                reason,
+                            });
+                            continue;
+                        }
                     };
-                    read_channel(&channel, animation.index(), buffers, (nodes, meshes), fault)
-                })
-                .collect::<Result<Vec<_>, _>>()?;
-            Ok(AnimationClip {
-                name: animation.name().map(str::to_owned),
-                channels,
-            })
-        })
-        .collect()
-}
-
-/// One channel of animation `animation`; `fault` names it in errors.
-fn read_channel(
-    channel: &gltf::animation::Channel,
-    animation: usize,
-    buffers: &[Vec<u8>],
-    (nodes, meshes): (&[Node], &[Mesh]),
-    fault: impl Fn(String) -> Fault,
-) -> Result<Channel, Fault> {
-    let node = channel.target().node().index();
-    let (target, width) = match channel.target().property() {
-        Property::Translation => (Target::Translation(node), 3),
-        Property::Rotation => (Target::Rotation(node), 4),
-        Property::Scale => (Target::Scale(node), 3),
-        Property::MorphTargetWeights => {
-            let targets = nodes
-                .get(node)
-                .and_then(|node| node.mesh)
-                .and_then(|mesh| meshes.get(mesh))
-                .map_or(0, |mesh| mesh.morph_targets.len());
-            if targets == 0 {
+                    // `pointer.rs` checked the index against the samplers.
+                    let sampler = animation.samplers().nth(channel.sampler).ok_or_else(|| {
+                        fault(format!("names missing sampler {}", channel.sampler))
+                    })?;
+                    (target, sampler, Some(channel.pointer.as_str()))
+                }
+            };
+            let width = target.width(|node| morph_targets(scene, node));
+            if let (Target::Weights(node), 0) = (target, width) {
                 return Err(fault(format!(
                     "animates the weights of node {node}, which has no mesh with morph targets"
                 )));
             }
-            (Target::Weights(node), targets)
+            let reader = Reader {
+                animation: a,
+                sampler: sampler.index(),
+                channel: c,
+                pointer,
+            };
+            let keys = reader.keys(&sampler, target, width, buffers)?;
+            keys.validate()
+                .map_err(|problem| fault(format!("sampler {} {problem}", reader.sampler)))?;
+            channels.push(Channel {
+                target,
+                sampler: keys,
+            });
         }
-    };
-    let sampler = channel.sampler();
-    let s = sampler.index();
-    let input = sampler.input();
-    let output = sampler.output();
-    let input_usage = format!("input of animation {animation} sampler {s}");
-    let output_usage = format!("output of animation {animation} sampler {s}");
-    let times: Vec<f32> = Use {
-        accessor: &input,
-        usage: &input_usage,
+        clips.push(AnimationClip {
+            name: animation.name().map(str::to_owned),
+            channels,
+        });
     }
-    .vectors::<1>(buffers)?
-    .into_iter()
-    .map(|[time]| time)
-    .collect();
-    let output = Use {
-        accessor: &output,
-        usage: &output_usage,
-    };
-    let values = match target {
-        Target::Translation(_) | Target::Scale(_) => flatten(output.vectors::<3>(buffers)?),
-        Target::Rotation(_) => flatten(output.vectors::<4>(buffers)?),
-        Target::Weights(_) => flatten(output.vectors::<1>(buffers)?),
-    };
-    let sampler = Sampler {
-        interpolation: match sampler.interpolation() {
-            FileInterpolation::Step => Interpolation::Step,
-            FileInterpolation::Linear => Interpolation::Linear,
-            FileInterpolation::CubicSpline => Interpolation::CubicSpline,
+    Ok(Animations { clips, skipped })
+}
+
+/// The channels of `animation` in the file's order: the pointer channels
+/// at their own indices, the glTF crate's (the rest, in order) between.
+fn file_order<'d, 'p>(
+    animation: &gltf::Animation<'d>,
+    pointers: &'p [PointerChannel],
+) -> impl Iterator<Item = Source<'d, 'p>> {
+    let mut nodes = animation.channels();
+    let mut pointers = pointers.iter().peekable();
+    (0..).map_while(
+        move |index| match pointers.next_if(|p| p.channel == index) {
+            Some(pointer) => Some(Source::Pointer(pointer)),
+            None => nodes.next().map(Source::Node),
         },
-        times,
-        values,
-        width,
-    };
-    sampler
-        .validate()
-        .map_err(|problem| fault(format!("sampler {s} {problem}")))?;
-    Ok(Channel { target, sampler })
+    )
+}
+
+fn node_target(channel: &gltf::animation::Channel) -> Target {
+    let node = channel.target().node().index();
+    match channel.target().property() {
+        Property::Translation => Target::Translation(node),
+        Property::Rotation => Target::Rotation(node),
+        Property::Scale => Target::Scale(node),
+        Property::MorphTargetWeights => Target::Weights(node),
+    }
+}
+
+/// Morph targets of `node`'s mesh (0 without a mesh or targets).
+fn morph_targets(scene: &Animatable, node: usize) -> usize {
+    scene
+        .nodes
+        .get(node)
+        .and_then(|node| node.mesh)
+        .and_then(|mesh| scene.meshes.get(mesh))
+        .map_or(0, |mesh| mesh.morph_targets.len())
+}
+
+/// One channel's sampler, named as accessor faults name it.
+struct Reader<'p> {
+    animation: usize,
+    sampler: usize,
+    channel: usize,
+    pointer: Option<&'p str>,
+}
+
+impl Reader<'_> {
+    /// What `role` ("input", "output") of the sampler is read for.
+    fn usage(&self, role: &str) -> String {
+        let pointer = self
+            .pointer
+            .map_or(String::new(), |pointer| format!(", pointer {pointer}"));
+        format!(
+            "{role} of animation {} sampler {}, read by channel {}{pointer}",
+            self.animation, self.sampler, self.channel
+        )
+    }
+
+    /// The keys of `sampler` for `target`, `width` components a value.
+    /// The output accessor's type must be the property's: SCALAR, VEC3 or
+    /// VEC4 (morph weights are SCALARs, one per target and key).
+    fn keys(
+        &self,
+        sampler: &gltf::animation::Sampler,
+        target: Target,
+        width: usize,
+        buffers: &[Vec<u8>],
+    ) -> Result<Sampler, Fault> {
+        let times: Vec<f32> = Use {
+            accessor: &sampler.input(),
+            usage: &self.usage("input"),
+        }
+        .vectors::<1>(buffers)?
+        .into_iter()
+        .map(|[time]| time)
+        .collect();
+        let accessor = sampler.output();
+        let usage = self.usage("output");
+        let output = Use {
+            accessor: &accessor,
+            usage: &usage,
+        };
+        let element = match target {
+            Target::Weights(_) => 1,
+            _ => width,
+        };
+        let values = match element {
+            3 => flatten(output.vectors::<3>(buffers)?),
+            4 => flatten(output.vectors::<4>(buffers)?),
+            _ => flatten(output.vectors::<1>(buffers)?),
+        };
+        Ok(Sampler {
+            interpolation: match sampler.interpolation() {
+                FileInterpolation::Step => Interpolation::Step,
+                FileInterpolation::Linear => Interpolation::Linear,
+                FileInterpolation::CubicSpline => Interpolation::CubicSpline,
+            },
+            times,
+            values,
+            width,
+        })
+    }
 }
 
 fn flatten<const N: usize>(vectors: Vec<[f32; N]>) -> Vec<f32> {

@@ -1,6 +1,7 @@
 //! From the file's bytes to a validated glTF document: the .glb container
 //! (header and chunks), the JSON, the required extensions, and the glTF
-//! crate's schema validation.
+//! crate's schema validation. KHR_animation_pointer channels, which the
+//! crate refuses, are taken out of the JSON first (see `pointer.rs`).
 //!
 //! The .glb container is split here rather than by the glTF crate so that a
 //! wrong magic or a truncated file gets a message that says so (the crate
@@ -12,6 +13,7 @@ use std::path::Path;
 use gltf::json;
 
 use super::error::Fault;
+use super::pointer::PointerChannels;
 
 /// Extensions lmanim honours; a file that requires any other is refused,
 /// since rendering it without the extension would be wrong.
@@ -20,7 +22,10 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_materials_specular",
+    ANIMATION_POINTER,
 ];
+
+const ANIMATION_POINTER: &str = "KHR_animation_pointer";
 
 /// The JSON and the optional BIN chunk of a file.
 pub struct Container<'a> {
@@ -120,16 +125,19 @@ fn read_u32(bytes: &[u8], at: usize) -> u32 {
     u32::from_le_bytes(word)
 }
 
+/// A validated document and the animation channels it could not hold.
+pub struct Parsed {
+    pub document: gltf::Document,
+    pub pointers: PointerChannels,
+}
+
 /// Parses and validates the JSON. Checks that the glTF crate's own
 /// validation relies on (it indexes a primitive's POSITION accessor without a
 /// bounds check) run first.
-pub fn parse_document(json_bytes: &[u8]) -> Result<gltf::Document, Fault> {
-    let root: json::Root = match json::deserialize::from_slice(json_bytes) {
-        Ok(root) => root,
-        Err(error) => match without_pointer_channels(json_bytes) {
-            Some(root) => root.map_err(Fault::Json)?,
-            None => return Err(Fault::Json(error)),
-        },
+pub fn parse_document(json_bytes: &[u8]) -> Result<Parsed, Fault> {
+    let (mut root, pointers): (json::Root, _) = match json::deserialize::from_slice(json_bytes) {
+        Ok(root) => (root, PointerChannels::default()),
+        Err(error) => without_pointer_channels(json_bytes).unwrap_or(Err(Fault::Json(error)))?,
     };
     if let Some(extension) = root
         .extensions_required
@@ -138,47 +146,38 @@ pub fn parse_document(json_bytes: &[u8]) -> Result<gltf::Document, Fault> {
     {
         return Err(Fault::UnsupportedExtension(extension.clone()));
     }
+    // The crate refuses required extensions it does not implement itself;
+    // lmanim reads KHR_animation_pointer apart from it (see `pointer.rs`).
+    root.extensions_required
+        .retain(|name| name != ANIMATION_POINTER);
     check_primitive_accessors(&root)?;
-    gltf::Document::from_json(root).map_err(|error| {
+    let document = gltf::Document::from_json(root).map_err(|error| {
         // The crate's message starts with "invalid glTF:" too.
         let message = error.to_string();
         let details = message.trim_start_matches("invalid glTF:").trim();
         Fault::Invalid(details.trim_end_matches(';').to_owned())
-    })
+    })?;
+    Ok(Parsed { document, pointers })
 }
 
-/// The document without its KHR_animation_pointer channels, or None when it
-/// has none. Such a channel has no `target.node`, which the glTF crate's
-/// schema requires, so the whole file would otherwise be refused; lmanim
-/// does not animate lights, cameras or materials yet, so the channels are
-/// dropped with a warning and the rest of the file imports.
-fn without_pointer_channels(json_bytes: &[u8]) -> Option<Result<json::Root, serde_json::Error>> {
+/// The document without its KHR_animation_pointer channels, and those
+/// channels; None when it has none, so that the crate's own error stands.
+/// Such a channel has no `target.node`, which the glTF crate's schema
+/// requires, so the whole file would otherwise be refused.
+fn without_pointer_channels(
+    json_bytes: &[u8],
+) -> Option<Result<(json::Root, PointerChannels), Fault>> {
     let mut document: serde_json::Value = serde_json::from_slice(json_bytes).ok()?;
-    let mut dropped = 0;
-    for animation in document.get_mut("animations")?.as_array_mut()? {
-        let Some(channels) = animation
-            .get_mut("channels")
-            .and_then(serde_json::Value::as_array_mut)
-        else {
-            continue;
-        };
-        let before = channels.len();
-        channels.retain(|channel| {
-            channel
-                .pointer("/target/path")
-                .and_then(serde_json::Value::as_str)
-                != Some("pointer")
-        });
-        dropped += before - channels.len();
-    }
-    if dropped == 0 {
-        return None;
-    }
-    log::warn!(
-        "ignoring {dropped} KHR_animation_pointer channel(s): animating lights, cameras and \
-         materials is not supported yet"
-    );
-    Some(serde_json::from_value(document))
+    let pointers = match PointerChannels::take(&mut document) {
+        Ok(pointers) if pointers.is_empty() => return None,
+        Ok(pointers) => pointers,
+        Err(fault) => return Some(Err(fault)),
+    };
+    Some(
+        serde_json::from_value(document)
+            .map(|root| (root, pointers))
+            .map_err(Fault::Json),
+    )
 }
 
 fn check_primitive_accessors(root: &json::Root) -> Result<(), Fault> {

@@ -18,15 +18,19 @@
 //!   channels; STEP, LINEAR and CUBICSPLINE), skins with their inverse bind
 //!   matrices and every JOINTS_n/WEIGHTS_n set (weights normalised), morph
 //!   targets' POSITION and NORMAL offsets and the default weights of meshes
-//!   and nodes.
+//!   and nodes;
+//! - KHR_animation_pointer channels of those node properties, of lights
+//!   (colour, intensity, range, spot cone angles), of perspective cameras
+//!   (`yfov`, `zfar`) and of material factors (base colour, metallic,
+//!   roughness, emissive, transmission, IOR, specular). A pointer to any
+//!   other property, or to an object the file lacks, skips its channel with
+//!   a warning that names the file, animation, channel and pointer.
 //!
 //! Indices of nodes, meshes, materials, lights, cameras, skins and
 //! animations are the file's.
 //!
-//! Not (yet) imported: KHR_animation_pointer channels (the file still
-//! imports, with a warning, without them), morph targets' TANGENT offsets,
-//! textures other than base colour and emissive, texture transforms, UV
-//! sets other than 0.
+//! Not (yet) imported: morph targets' TANGENT offsets, textures other than
+//! base colour and emissive, texture transforms, UV sets other than 0.
 //!
 //! Bad files never panic: sizes, bounds and references are checked before
 //! anything is allocated or indexed (see `accessor.rs` and `buffers.rs`), and
@@ -46,6 +50,7 @@ mod mesh;
 mod morph;
 mod nodes;
 mod normals;
+mod pointer;
 mod skin;
 mod texture;
 mod topology;
@@ -58,6 +63,7 @@ pub use container::SUPPORTED_EXTENSIONS;
 pub use error::{Fault, ImportError};
 
 use crate::scene::SceneDesc;
+use animation::Animatable;
 
 /// Imports the glTF scene at `path`.
 pub fn load(path: &Path) -> Result<SceneDesc, ImportError> {
@@ -72,11 +78,11 @@ pub fn load(path: &Path) -> Result<SceneDesc, ImportError> {
 fn import(path: &Path) -> Result<SceneDesc, Fault> {
     let bytes = std::fs::read(path).map_err(Fault::Read)?;
     let container = container::split(&bytes, path)?;
-    let document = container::parse_document(container.json)?;
+    let container::Parsed { document, pointers } = container::parse_document(container.json)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let buffers = buffers::load(&document, container.bin, base)?;
 
-    let (nodes, roots) = nodes::import(&document)?;
+    let (mut nodes, roots) = nodes::import(&document)?;
     let file_materials = document.materials().len();
     let append_default = document
         .meshes()
@@ -94,7 +100,24 @@ fn import(path: &Path) -> Result<SceneDesc, Fault> {
     })?;
     let skins = skin::import(&document, &buffers)?;
     skin::check_bindings(&nodes, &meshes, &skins)?;
-    let animations = animation::import(&document, &buffers, &nodes, &meshes)?;
+    let lights = lights::import(&document)?;
+    let cameras = camera::import(&document)?;
+    let animations = animation::import(
+        &document,
+        &buffers,
+        &pointers,
+        &Animatable {
+            nodes: &nodes,
+            meshes: &meshes,
+            lights: &lights,
+            cameras: &cameras,
+            materials: file_materials,
+        },
+    )?;
+    for skipped in &animations.skipped {
+        log::warn!("{}: {skipped}", path.display());
+    }
+    nodes::mark_motion(&mut nodes, &animations.clips);
 
     Ok(SceneDesc {
         name: path
@@ -106,10 +129,10 @@ fn import(path: &Path) -> Result<SceneDesc, Fault> {
         meshes,
         materials,
         textures,
-        lights: lights::import(&document)?,
-        cameras: camera::import(&document)?,
+        lights,
+        cameras,
         skins,
-        animations,
+        animations: animations.clips,
     })
 }
 

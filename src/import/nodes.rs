@@ -1,24 +1,23 @@
 //! The node tree: local transforms in `f64`, the tree's shape checked (one
 //! parent per node, no cycles, roots without parents), the scene's roots, and
-//! which nodes animation will move or deform.
+//! which nodes animation will move or deform (once the clips are read).
 //!
 //! Node indices stay the file's, so that animation channels, skins and
 //! error messages can name nodes as the file does.
 
 use glam::{DMat4, DQuat, DVec3};
-use gltf::animation::Property;
 use gltf::scene::Transform;
 
 use super::error::Fault;
-use crate::scene::Node;
+use crate::scene::{AnimationClip, Node, Target};
 
 /// All nodes of the file and the roots of the scene to render (the default
-/// scene, or the first one).
+/// scene, or the first one). Skinned nodes deform; what the clips move or
+/// deform is marked by [`mark_motion`].
 pub fn import(document: &gltf::Document) -> Result<(Vec<Node>, Vec<usize>), Fault> {
     let parents = parents(document)?;
     check_acyclic(&parents)?;
     let roots = roots(document, &parents)?;
-    let motion = Motion::of(document);
     let nodes = document
         .nodes()
         .map(|node| {
@@ -29,8 +28,8 @@ pub fn import(document: &gltf::Document) -> Result<(Vec<Node>, Vec<usize>), Faul
                 mesh: node.mesh().map(|mesh| mesh.index()),
                 light: node.light().map(|light| light.index()),
                 camera: node.camera().map(|camera| camera.index()),
-                animated: motion.moved[node.index()],
-                deforms: motion.deforms(&node),
+                animated: false,
+                deforms: node.skin().is_some(),
                 skin: node.skin().map(|skin| skin.index()),
                 weights: node.weights().map(<[f32]>::to_vec),
             })
@@ -168,39 +167,25 @@ fn roots(document: &gltf::Document, parents: &[Option<usize>]) -> Result<Vec<usi
     Ok(roots)
 }
 
-/// Which nodes the file's animations move, and which get morph weights.
-struct Motion {
-    moved: Vec<bool>,
-    weighted: Vec<bool>,
-}
-
-impl Motion {
-    fn of(document: &gltf::Document) -> Motion {
-        let count = document.nodes().len();
-        let mut motion = Motion {
-            moved: vec![false; count],
-            weighted: vec![false; count],
-        };
-        for channel in document.animations().flat_map(|clip| clip.channels()) {
-            let target = channel.target();
-            let node = target.node().index();
-            match target.property() {
-                Property::Translation | Property::Rotation | Property::Scale => {
-                    motion.moved[node] = true
+/// Marks the nodes whose translation, rotation or scale some clip animates
+/// (they and their subtrees move) and those whose morph weights it
+/// animates (their meshes deform; import has refused weights channels on
+/// nodes without morph targets). Channels of lights, cameras and materials
+/// move nothing.
+pub fn mark_motion(nodes: &mut [Node], clips: &[AnimationClip]) {
+    for channel in clips.iter().flat_map(|clip| &clip.channels) {
+        match channel.target {
+            Target::Translation(node) | Target::Rotation(node) | Target::Scale(node) => {
+                if let Some(node) = nodes.get_mut(node) {
+                    node.animated = true;
                 }
-                Property::MorphTargetWeights => motion.weighted[node] = true,
             }
+            Target::Weights(node) => {
+                if let Some(node) = nodes.get_mut(node) {
+                    node.deforms = true;
+                }
+            }
+            Target::Light(..) | Target::Camera(..) | Target::Material(..) => {}
         }
-        motion
-    }
-
-    /// A skinned node deforms; so does one whose morph weights are animated,
-    /// if its mesh has morph targets for the weights to blend.
-    fn deforms(&self, node: &gltf::Node) -> bool {
-        let has_targets = node.mesh().is_some_and(|mesh| {
-            mesh.primitives()
-                .any(|primitive| primitive.morph_targets().next().is_some())
-        });
-        node.skin().is_some() || (self.weighted[node.index()] && has_targets)
     }
 }

@@ -2,7 +2,8 @@
 //! anchor fixed for the whole sequence (the centre of the scene's bounds at
 //! rest). Object transforms, lights and the camera are composed in `f64`
 //! and only then rounded to `f32`, so a city modelled 100 km from the origin
-//! renders exactly like the same city at the origin.
+//! renders exactly like the same city at the origin. Lights, the camera's
+//! projection and materials take the pose's (possibly animated) values.
 
 use std::sync::Arc;
 
@@ -12,7 +13,7 @@ use super::camera::RenderCamera;
 use super::light::RenderLight;
 use crate::anim::deform::{deformed_mesh, DeformedMesh};
 use crate::scene::pose::{dynamic_nodes, Pose};
-use crate::scene::{Light, Projection, SceneDesc};
+use crate::scene::{Light, Material, Projection, SceneDesc};
 use crate::settings::LampSettings;
 
 /// A mesh instance: one node that carries a mesh.
@@ -33,6 +34,10 @@ pub struct FrameScene {
     pub objects: Vec<PlacedObject>,
     pub lights: Vec<RenderLight>,
     pub camera: RenderCamera,
+    /// The scene's materials as the pose has them, indexed like
+    /// `SceneDesc::materials`. Animating them changes shading only: which
+    /// objects are dynamic depends on geometry alone.
+    pub materials: Vec<Material>,
     /// True when the scene has no camera and one was made to frame it.
     pub automatic_camera: bool,
     /// Per object, its mesh as the pose deforms it (skins, morph targets),
@@ -120,7 +125,7 @@ impl FrameScene {
             .iter()
             .enumerate()
             .filter_map(|(index, node)| {
-                let light = scene.lights.get(node.light?)?;
+                let light = pose.properties.lights.get(node.light?)?;
                 Some(RenderLight::place(
                     light,
                     pose.world[index],
@@ -147,6 +152,7 @@ impl FrameScene {
             objects,
             lights,
             camera,
+            materials: pose.properties.materials.clone(),
             automatic_camera,
             deformed,
         })
@@ -192,7 +198,7 @@ fn place_camera(
             None => Ok(None),
         };
     };
-    let camera = &scene.cameras[scene.nodes[node].camera.unwrap_or_default()];
+    let projection = pose.properties.cameras[scene.nodes[node].camera.unwrap_or_default()];
     let world = pose.world[node];
     let axis =
         |v: DVec3, fallback: DVec3| world.transform_vector3(v).normalize_or(fallback).as_vec3();
@@ -201,7 +207,7 @@ fn place_camera(
         right: axis(DVec3::X, DVec3::X),
         up: axis(DVec3::Y, DVec3::Y),
         backward: axis(DVec3::Z, DVec3::Z),
-        projection: camera.projection,
+        projection,
     }))
 }
 

@@ -88,7 +88,7 @@ impl ShadingPoint {
             None => Vec2::ZERO,
         };
         let material_index = mesh.triangle_materials.get(triangle).copied().unwrap_or(0) as usize;
-        let material = scene
+        let material = frame
             .materials
             .get(material_index)
             .map(|m| SurfaceMaterial::at(m, &scene.textures, uv))

@@ -1,7 +1,8 @@
-//! Animation clips as plain data: which property of which node a channel
-//! drives, and the keyframes of its sampler. Import fills these from a
-//! file's `animations`, the authoring builder writes them, and
-//! [`crate::anim`] samples them into a [`super::pose::Pose`].
+//! Animation clips as plain data: which property of which node, light,
+//! camera or material a channel drives, and the keyframes of its sampler.
+//! Import fills these from a file's `animations`, the authoring builder
+//! writes them, and [`crate::anim`] samples them into a
+//! [`super::pose::Pose`].
 
 /// One glTF animation: channels that play together on one timeline.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -17,7 +18,11 @@ pub struct Channel {
     pub sampler: Sampler,
 }
 
-/// What a channel drives; each variant holds the node index.
+/// What a channel drives. Node properties come from a channel's
+/// `target.node` and `path` (or a KHR_animation_pointer to a node); light,
+/// camera and material properties only from KHR_animation_pointer. Each
+/// variant holds the index of the node, light, camera or material in the
+/// scene's arrays.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Target {
     /// The node's translation (3 components).
@@ -28,16 +33,153 @@ pub enum Target {
     Scale(usize),
     /// The morph weights of the node's mesh (one per morph target).
     Weights(usize),
+    /// A property of a KHR_lights_punctual light.
+    Light(usize, LightProperty),
+    /// A property of a camera's projection.
+    Camera(usize, CameraProperty),
+    /// A factor of a material.
+    Material(usize, MaterialProperty),
 }
 
 impl Target {
-    /// The node whose property the channel drives.
-    pub fn node(self) -> usize {
+    /// The kind of object the channel animates, and its index.
+    pub fn object(self) -> (TargetKind, usize) {
         match self {
             Target::Translation(node)
             | Target::Rotation(node)
             | Target::Scale(node)
-            | Target::Weights(node) => node,
+            | Target::Weights(node) => (TargetKind::Node, node),
+            Target::Light(light, _) => (TargetKind::Light, light),
+            Target::Camera(camera, _) => (TargetKind::Camera, camera),
+            Target::Material(material, _) => (TargetKind::Material, material),
+        }
+    }
+
+    /// The node whose property the channel drives; None for lights,
+    /// cameras and materials, which move nothing.
+    pub fn node(self) -> Option<usize> {
+        match self.object() {
+            (TargetKind::Node, node) => Some(node),
+            _ => None,
+        }
+    }
+
+    /// Components per value. Morph weights have one per morph target of
+    /// the node's mesh, which `morph_targets(node)` tells.
+    pub fn width(self, morph_targets: impl FnOnce(usize) -> usize) -> usize {
+        match self {
+            Target::Translation(_) | Target::Scale(_) => 3,
+            Target::Rotation(_) => 4,
+            Target::Weights(node) => morph_targets(node),
+            Target::Light(_, property) => property.width(),
+            Target::Camera(_, property) => property.width(),
+            Target::Material(_, property) => property.width(),
+        }
+    }
+}
+
+/// The kinds of object a channel can animate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TargetKind {
+    Node,
+    Light,
+    Camera,
+    Material,
+}
+
+impl TargetKind {
+    /// The word messages use: "node", "light", "camera", "material".
+    pub fn name(self) -> &'static str {
+        match self {
+            TargetKind::Node => "node",
+            TargetKind::Light => "light",
+            TargetKind::Camera => "camera",
+            TargetKind::Material => "material",
+        }
+    }
+}
+
+/// The animatable properties of a light (KHR_lights_punctual).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum LightProperty {
+    /// Linear RGB colour (3 components).
+    Color,
+    Intensity,
+    Range,
+    /// A spot light's cone angles, in radians.
+    InnerConeAngle,
+    OuterConeAngle,
+}
+
+impl LightProperty {
+    pub const ALL: [LightProperty; 5] = [
+        LightProperty::Color,
+        LightProperty::Intensity,
+        LightProperty::Range,
+        LightProperty::InnerConeAngle,
+        LightProperty::OuterConeAngle,
+    ];
+
+    pub fn width(self) -> usize {
+        match self {
+            LightProperty::Color => 3,
+            _ => 1,
+        }
+    }
+}
+
+/// The animatable properties of a camera: those the render camera uses.
+/// (A perspective camera's `znear` and `aspectRatio` play no part in
+/// rendering, so animating them would change nothing.)
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum CameraProperty {
+    /// A perspective camera's vertical field of view, in radians.
+    Yfov,
+    /// A perspective camera's far plane, in metres.
+    Zfar,
+}
+
+impl CameraProperty {
+    pub const ALL: [CameraProperty; 2] = [CameraProperty::Yfov, CameraProperty::Zfar];
+
+    pub fn width(self) -> usize {
+        1
+    }
+}
+
+/// The animatable factors of a material: those [`super::Material`] has.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MaterialProperty {
+    /// Linear RGBA (4 components).
+    BaseColor,
+    Metallic,
+    Roughness,
+    /// Linear RGB (3 components).
+    Emissive,
+    /// KHR_materials_transmission.
+    Transmission,
+    /// KHR_materials_ior.
+    Ior,
+    /// KHR_materials_specular.
+    Specular,
+}
+
+impl MaterialProperty {
+    pub const ALL: [MaterialProperty; 7] = [
+        MaterialProperty::BaseColor,
+        MaterialProperty::Metallic,
+        MaterialProperty::Roughness,
+        MaterialProperty::Emissive,
+        MaterialProperty::Transmission,
+        MaterialProperty::Ior,
+        MaterialProperty::Specular,
+    ];
+
+    pub fn width(self) -> usize {
+        match self {
+            MaterialProperty::BaseColor => 4,
+            MaterialProperty::Emissive => 3,
+            _ => 1,
         }
     }
 }
@@ -64,8 +206,8 @@ pub struct Sampler {
     /// `width` components per element, one element per key — or, for
     /// CUBICSPLINE, three per key: in-tangent, value, out-tangent.
     pub values: Vec<f32>,
-    /// Components per element: 3 (translation, scale), 4 (rotation), or
-    /// the number of morph targets (weights).
+    /// Components per element: [`Target::width`], or the number of morph
+    /// targets (weights).
     pub width: usize,
 }
 

@@ -5,14 +5,19 @@
 //!
 //! World placement is computed by [`pose`] in `f64`, so that scenes far from
 //! the origin keep their precision until the renderer subtracts its anchor.
-//! Animation clips ([`animation`]) and what deforms meshes ([`deformation`])
+//! Animation clips ([`animation`], with the KHR_animation_pointer paths of
+//! their targets in [`pointer`]) and what deforms meshes ([`deformation`])
 //! are plain data too; [`crate::anim`] samples them.
 
 pub mod animation;
 pub mod deformation;
+pub mod pointer;
 pub mod pose;
 
-pub use animation::{AnimationClip, Channel, Interpolation, Sampler, Target};
+pub use animation::{
+    AnimationClip, CameraProperty, Channel, Interpolation, LightProperty, MaterialProperty,
+    Sampler, Target, TargetKind,
+};
 pub use deformation::{JointSet, MorphTarget, Skin};
 
 use glam::{DMat4, Vec2, Vec3, Vec4};
@@ -83,7 +88,7 @@ pub struct Mesh {
 }
 
 /// glTF metallic-roughness material, with the extensions lmanim honours.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: Option<String>,
     /// Linear RGBA base colour factor.
@@ -152,7 +157,7 @@ pub enum Wrap {
 
 /// A KHR_lights_punctual light in its node's space: it sits at the node's
 /// origin and points down the node's −Z.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Light {
     pub name: Option<String>,
     pub kind: LightKind,

@@ -1,15 +1,16 @@
 //! Where everything is at one instant: world transforms of the nodes, the
-//! joint matrices of every skin and the morph weights of every node. The
-//! rest pose (the file's own transforms) is built here; [`crate::anim`]
-//! samples clips into the same [`Pose`] (`Pose::at`), so that nothing
-//! downstream knows whether a scene is animated.
+//! joint matrices of every skin, the morph weights of every node, and the
+//! light, camera and material values that KHR_animation_pointer channels
+//! animate. The rest pose (the file's own values) is built here;
+//! [`crate::anim`] samples clips into the same [`Pose`] (`Pose::at`), so
+//! that nothing downstream knows whether a scene is animated.
 //!
 //! Transforms are composed in `f64`: a scene placed 100 km from the origin
 //! keeps millimetre precision until the renderer subtracts its anchor.
 
 use glam::DMat4;
 
-use super::SceneDesc;
+use super::{Light, Material, Projection, SceneDesc};
 
 /// A posed scene, indexed like the scene's own arrays.
 #[derive(Clone, Debug, PartialEq)]
@@ -24,19 +25,58 @@ pub struct Pose {
     /// Per node, the morph weights of its mesh; empty for nodes without a
     /// mesh that has morph targets.
     pub weights: Vec<Vec<f32>>,
+    pub properties: Properties,
+}
+
+/// The lights, camera projections and materials at one instant, indexed
+/// like the scene's arrays: the file's own at rest, with the values
+/// KHR_animation_pointer channels give them when animated. Whole copies
+/// rather than the animated numbers alone, so that everything downstream
+/// reads a light, camera or material from one place.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Properties {
+    pub lights: Vec<Light>,
+    pub cameras: Vec<Projection>,
+    pub materials: Vec<Material>,
+}
+
+impl Properties {
+    /// The file's own values.
+    pub fn rest(scene: &SceneDesc) -> Properties {
+        Properties {
+            lights: scene.lights.clone(),
+            cameras: scene
+                .cameras
+                .iter()
+                .map(|camera| camera.projection)
+                .collect(),
+            materials: scene.materials.clone(),
+        }
+    }
 }
 
 impl Pose {
-    /// The pose given by the nodes' own transforms and default weights.
+    /// The pose given by the nodes' own transforms and default weights,
+    /// and the file's lights, cameras and materials.
     pub fn rest(scene: &SceneDesc) -> Pose {
         let locals: Vec<DMat4> = scene.nodes.iter().map(|node| node.local).collect();
-        Pose::from_locals(scene, &locals, default_weights(scene))
+        Pose::from_locals(
+            scene,
+            &locals,
+            default_weights(scene),
+            Properties::rest(scene),
+        )
     }
 
     /// Composes local transforms (one per node) down the tree, and the skin
     /// matrices from the result. Import has already rejected node cycles,
     /// so the walk from the roots terminates.
-    pub fn from_locals(scene: &SceneDesc, locals: &[DMat4], weights: Vec<Vec<f32>>) -> Pose {
+    pub fn from_locals(
+        scene: &SceneDesc,
+        locals: &[DMat4],
+        weights: Vec<Vec<f32>>,
+        properties: Properties,
+    ) -> Pose {
         let mut world = vec![DMat4::IDENTITY; scene.nodes.len()];
         let mut stack: Vec<(usize, DMat4)> = scene
             .roots
@@ -68,6 +108,7 @@ impl Pose {
             world,
             joints,
             weights,
+            properties,
         }
     }
 }

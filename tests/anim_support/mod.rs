@@ -1,7 +1,8 @@
 //! Animated glTF test models written with the authoring builder: every
-//! interpolation mode on node TRS, a skinned strip with a morph target, and
-//! morph weights on two nodes sharing a mesh. The inspect and three.js
-//! tests pose the same files.
+//! interpolation mode on node TRS, a skinned strip with a morph target,
+//! morph weights on two nodes sharing a mesh, and KHR_animation_pointer
+//! channels on lights, a camera and a material. The inspect and three.js
+//! tests pose the same files (three.js all but the pointer model).
 #![allow(dead_code)] // each test file uses its own subset
 
 use std::path::{Path, PathBuf};
@@ -10,8 +11,8 @@ use glam::{DMat4, DVec3, Quat, Vec3};
 use lmanim::authoring::Geometry;
 use lmanim::authoring::{GltfBuilder, NodeDesc, Primitive};
 use lmanim::scene::{
-    AnimationClip, Camera, Channel, Interpolation, JointSet, Light, LightKind, MorphTarget,
-    Projection, Sampler, Skin, Target,
+    AnimationClip, Camera, CameraProperty, Channel, Interpolation, JointSet, Light, LightKind,
+    LightProperty, Material, MaterialProperty, MorphTarget, Projection, Sampler, Skin, Target,
 };
 
 /// Times that cover before the first key, between keys, on keys and after
@@ -26,19 +27,12 @@ pub fn channel(
     times: &[f32],
     values: Vec<f32>,
 ) -> Channel {
-    let width = match target {
-        Target::Translation(_) | Target::Scale(_) => 3,
-        Target::Rotation(_) => 4,
-        Target::Weights(_) => {
-            values.len()
-                / times.len()
-                / if interpolation == Interpolation::CubicSpline {
-                    3
-                } else {
-                    1
-                }
-        }
+    // Morph weights: as many per key as the values hold.
+    let elements_per_key = match interpolation {
+        Interpolation::CubicSpline => 3,
+        Interpolation::Step | Interpolation::Linear => 1,
     };
+    let width = target.width(|_| values.len() / times.len() / elements_per_key);
     Channel {
         target,
         sampler: Sampler {
@@ -441,6 +435,133 @@ pub fn morph(dir: &Path) -> PathBuf {
     ))
     .expect("animation");
     let path = dir.join("morph.gltf");
+    b.write_gltf(&path).expect("write");
+    path
+}
+
+/// KHR_animation_pointer channels on a light's colour (LINEAR), intensity
+/// (STEP) and range (LINEAR), a spot's outer cone (LINEAR), a camera's
+/// yfov (CUBICSPLINE) and a material's base colour (LINEAR), in that
+/// channel order, one sampler each. `anim_pointer.rs` checks the values
+/// by hand.
+pub fn pointers(dir: &Path) -> PathBuf {
+    let mut b = GltfBuilder::new();
+    let paint = b
+        .add_material(&Material {
+            name: Some("paint".into()),
+            metallic: 0.0,
+            ..Material::default()
+        })
+        .expect("material");
+    let geometry = b
+        .add_geometry(&lmanim::authoring::shapes::plane(glam::Vec2::ONE))
+        .expect("plane");
+    let mesh = b
+        .add_mesh(
+            "floor",
+            &[Primitive {
+                geometry,
+                material: Some(paint),
+            }],
+        )
+        .expect("mesh");
+    let lamp = b
+        .add_light(&Light {
+            name: Some("lamp".into()),
+            kind: LightKind::Point,
+            color: Vec3::ONE,
+            intensity: 10.0,
+            range: Some(4.0),
+            radius: Some(0.1),
+        })
+        .expect("light");
+    let spot = b
+        .add_light(&Light {
+            name: Some("spot".into()),
+            kind: LightKind::Spot {
+                inner_cone: 0.25,
+                outer_cone: 0.5,
+            },
+            color: Vec3::ONE,
+            intensity: 5.0,
+            range: None,
+            radius: None,
+        })
+        .expect("light");
+    let camera = b
+        .add_camera(&Camera {
+            name: Some("eye".into()),
+            projection: Projection::Perspective {
+                yfov: 0.8,
+                aspect_ratio: None,
+                znear: 0.1,
+                zfar: None,
+            },
+        })
+        .expect("camera");
+    b.add_node(NodeDesc {
+        mesh: Some(mesh),
+        ..NodeDesc::named("floor")
+    })
+    .expect("node");
+    for (name, light, y) in [("lamp", lamp, 2.0), ("spot", spot, 3.0)] {
+        b.add_node(NodeDesc {
+            light: Some(light),
+            translation: Vec3::new(0.0, y, 0.0),
+            ..NodeDesc::named(name)
+        })
+        .expect("node");
+    }
+    b.add_node(NodeDesc {
+        camera: Some(camera),
+        translation: Vec3::new(0.0, 1.0, 4.0),
+        ..NodeDesc::named("eye")
+    })
+    .expect("node");
+
+    let (lamp, spot, camera, paint) = (lamp.index(), spot.index(), camera.index(), paint.index());
+    let channels = vec![
+        channel(
+            Target::Light(lamp, LightProperty::Color),
+            Interpolation::Linear,
+            &[1.0, 2.0],
+            vec![1.0, 0.0, 0.0, 0.0, 0.5, 1.0],
+        ),
+        channel(
+            Target::Light(lamp, LightProperty::Intensity),
+            Interpolation::Step,
+            &[0.5, 1.5, 2.5],
+            vec![10.0, 20.0, 5.0],
+        ),
+        channel(
+            Target::Light(lamp, LightProperty::Range),
+            Interpolation::Linear,
+            &[0.0, 2.0],
+            vec![4.0, 8.0],
+        ),
+        channel(
+            Target::Light(spot, LightProperty::OuterConeAngle),
+            Interpolation::Linear,
+            &[0.0, 2.0],
+            vec![0.5, 0.75],
+        ),
+        // In-tangent, value, out-tangent per key.
+        channel(
+            Target::Camera(camera, CameraProperty::Yfov),
+            Interpolation::CubicSpline,
+            &[0.0, 2.0],
+            vec![0.0, 0.5, 0.25, 0.125, 1.0, 0.0],
+        ),
+        channel(
+            Target::Material(paint, MaterialProperty::BaseColor),
+            Interpolation::Linear,
+            &[0.0, 1.0],
+            vec![1.0, 1.0, 1.0, 1.0, 0.2, 0.4, 0.6, 0.8],
+        ),
+    ];
+    b.add_animation(&clip("looks", channels))
+        .expect("animation");
+    let path = dir.join("pointers.gltf");
     b.write_gltf(&path).expect("write");
     path
 }
