@@ -101,6 +101,7 @@ pub fn traverse_wide(
     }
 }
 
+#[inline(always)]
 fn walk_wide(
     bvh: &WideBvh,
     ray: &TraversalRay,

@@ -64,6 +64,7 @@ impl PointBrdf {
     }
 
     /// f(v, l) for the unit light direction `l`.
+    #[inline]
     pub fn evaluate(&self, l: Vec3) -> Vec3 {
         let n_dot_l = self.n.dot(l);
         if n_dot_l <= 0.0 || self.n_dot_v <= 0.0 {

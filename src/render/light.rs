@@ -94,6 +94,7 @@ impl RenderLight {
 
     /// The light's contribution arriving at `p`, or None where it brings
     /// nothing (outside its range or cone, or at its very position).
+    #[inline]
     pub fn incidence(&self, p: Vec3) -> Option<Incidence> {
         let (direction, irradiance) = match self.source {
             LightSource::Directional { towards } => (towards, self.power),

@@ -14,6 +14,7 @@ impl ShadingPoint {
     /// The light arriving from light i and its cosine at P, or None when
     /// light i cannot reach P whatever the occluders (behind the surface,
     /// outside its cone or range).
+    #[inline]
     pub fn reaching(&self, light: &RenderLight) -> Option<(Incidence, f32)> {
         let incidence = light.incidence(self.position)?;
         let l = incidence.direction;
@@ -28,6 +29,7 @@ impl ShadingPoint {
 
     /// Omega(i, P), or None when light i brings nothing to P whatever the
     /// occluders.
+    #[inline]
     pub fn omega(&self, light: &RenderLight) -> Option<Vec3> {
         let (incidence, cos_theta) = self.reaching(light)?;
         let reflectance = self.brdf.evaluate(incidence.direction);
