@@ -56,21 +56,45 @@ impl ChangedRegion {
         0.5 * (self.max - self.min).length()
     }
 
-    /// Whether `ray`'s segment (t in [0, t_max]) meets the box (slab test,
-    /// closed intervals).
+    /// Whether `ray`'s segment (t in [0, t_max]) meets the box.
     pub fn meets(&self, ray: &Ray) -> bool {
+        SlabSegment::new(ray).meets(self)
+    }
+}
+
+/// A segment prepared for slab tests against many boxes: the reciprocals
+/// of its direction computed once.
+struct SlabSegment {
+    origin: Vec3,
+    inverse: Vec3,
+    t_max: f32,
+}
+
+impl SlabSegment {
+    fn new(ray: &Ray) -> SlabSegment {
+        SlabSegment {
+            origin: ray.origin,
+            inverse: ray.direction.recip(),
+            t_max: ray.t_max,
+        }
+    }
+
+    /// Whether the segment meets the box (closed intervals). An axis the
+    /// segment runs parallel to has an infinite reciprocal: the slab
+    /// either holds the origin (the interval is everything) or not (empty).
+    fn meets(&self, region: &ChangedRegion) -> bool {
         let mut t_near = 0.0f32;
-        let mut t_far = ray.t_max;
+        let mut t_far = self.t_max;
         for axis in 0..3 {
-            let (origin, direction) = (ray.origin[axis], ray.direction[axis]);
-            let (low, high) = (self.min[axis], self.max[axis]);
-            if direction == 0.0 {
+            let (origin, inverse) = (self.origin[axis], self.inverse[axis]);
+            let (low, high) = (region.min[axis], region.max[axis]);
+            if inverse.is_infinite() {
                 if origin < low || origin > high {
                     return false;
                 }
                 continue;
             }
-            let (a, b) = ((low - origin) / direction, (high - origin) / direction);
+            let (a, b) = ((low - origin) * inverse, (high - origin) * inverse);
             t_near = t_near.max(a.min(b));
             t_far = t_far.min(a.max(b));
             if t_near > t_far {
@@ -192,6 +216,7 @@ impl LightMesh {
             })
             .collect();
         let lattice = self.lattice;
+        let words = lights.len().div_ceil(64).max(1);
         let brick_radius = lattice.h * (BRICK_EDGE - 1) as f32 * 3f32.sqrt() * 0.5 * (1.0 + 1e-5);
         let group_radius =
             lattice.h * (GROUP_EDGE * BRICK_EDGE - 1) as f32 * 3f32.sqrt() * 0.5 * (1.0 + 1e-5);
@@ -238,30 +263,43 @@ impl LightMesh {
                 return cleared;
             }
             let centre = sphere_of(join(brick, 0), join(brick, BRICK_NODES - 1));
-            let mut near: Vec<&ChangedRegion> = Vec::new();
-            // Pairs come grouped by light.
-            for run in pairs.chunk_by(|a, b| a.0 == b.0) {
-                let index = run[0].0;
-                let light = &lights[index];
-                let (word, bit) = (index / 64, 1u64 << (index % 64));
-                near.clear();
-                near.extend(
-                    run.iter()
-                        .filter(|&&(_, region)| {
-                            volumes[index][region].may_meet(centre, brick_radius)
-                        })
-                        .map(|&(_, region)| &padded[region]),
-                );
-                if near.is_empty() {
+            // The regions each light's volume brings near this brick, and
+            // per word the lights that have any: one pass over the slots
+            // then tests only their valid bits.
+            let mut near: Vec<(usize, &ChangedRegion)> = Vec::new();
+            let mut near_lights = vec![0u64; words];
+            for &(light, region) in pairs {
+                if volumes[light][region].may_meet(centre, brick_radius) {
+                    near.push((light, &padded[region]));
+                    near_lights[light / 64] |= 1 << (light % 64);
+                }
+            }
+            if near.is_empty() {
+                return cleared;
+            }
+            for slot in 0..BRICK_NODES {
+                if (0..words)
+                    .all(|word| validity.dynamic_valid(slot, word) & near_lights[word] == 0)
+                {
                     continue;
                 }
-                for slot in 0..BRICK_NODES {
-                    if validity.dynamic_valid(slot, word) & bit == 0 {
-                        continue;
-                    }
-                    let segment = light.shadow_ray(lattice.node_position(join(brick, slot)));
-                    if near.iter().any(|region| region.meets(&segment)) {
-                        cleared += validity.clear_dynamic(slot, word, bit);
+                let node = lattice.node_position(join(brick, slot));
+                for (word, &candidates) in near_lights.iter().enumerate() {
+                    let mut bits = validity.dynamic_valid(slot, word) & candidates;
+                    while bits != 0 {
+                        let bit = bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        let index = word * 64 + bit;
+                        let segment = SlabSegment::new(&lights[index].shadow_ray(node));
+                        // `near` follows `pairs`, sorted by light.
+                        let first = near.partition_point(|&(light, _)| light < index);
+                        let meets = near[first..]
+                            .iter()
+                            .take_while(|&&(light, _)| light == index)
+                            .any(|(_, region)| segment.meets(region));
+                        if meets {
+                            cleared += validity.clear_dynamic(slot, word, 1 << bit);
+                        }
                     }
                 }
             }
