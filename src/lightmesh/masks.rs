@@ -269,10 +269,11 @@ impl MaskStore {
     /// (node, light) pairs whose visibility is known (see
     /// [`NodeMask::valid`]): what the next frame can reuse.
     pub fn known_bits(&self) -> u64 {
+        use rayon::prelude::*;
         let stride = GROUPS * self.words;
         self.bricks
-            .values()
-            .flat_map(|bits| bits.chunks(stride))
+            .par_iter()
+            .flat_map_iter(|(_, bits)| bits.chunks(stride))
             .map(|node| {
                 let mask = NodeMask {
                     bits: node,
