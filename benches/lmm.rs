@@ -26,6 +26,7 @@ fn main() {
     let dir = tempfile::tempdir().expect("temporary directory");
     let backend = CpuBackend::new(None).expect("thread pool");
     println!("threads: {}", backend.threads());
+    let mut stage_rows = Vec::new();
     println!("| nL | size | method | seconds | vs Whitted | N_pix (points) | N_LM | bits computed | mean p2n tests | shadow rays |");
     println!("|---|---|---|---|---|---|---|---|---|---|");
     for lamps in [1u32, 4, 16, 64] {
@@ -66,8 +67,25 @@ fn main() {
                     mesh.mean_p2n_tests,
                     stats.rays.shadow
                 );
+                if lamps == 64 {
+                    let stages: Vec<String> = stats
+                        .stages
+                        .iter()
+                        .map(|(stage, seconds)| format!("{stage} {seconds:.2}"))
+                        .collect();
+                    stage_rows.push(format!("| {height}p | {method} | {} |", stages.join(", ")));
+                }
             }
         }
+    }
+
+    println!();
+    println!("Stage seconds at 64 lamps:");
+    println!();
+    println!("| size | method | stages |");
+    println!("|---|---|---|");
+    for row in stage_rows {
+        println!("{row}");
     }
 
     println!();

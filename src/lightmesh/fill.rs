@@ -205,6 +205,23 @@ impl LightMesh {
     ) -> FilledBrick {
         let stored = self.masks.brick(demand.brick);
         let needed = |slot: usize, word: usize| demand.needed[slot * words + word];
+        // From the second frame on, most bricks already hold every bit the
+        // frame needs: settle those without building anything.
+        if let Some(bits) = stored {
+            let complete = (0..BRICK_NODES).all(|slot| {
+                let mask = self.masks.slot_mask(bits, slot);
+                (0..words).all(|word| needed(slot, word) & !mask.valid(word) == 0)
+            });
+            if complete {
+                return FilledBrick {
+                    update: LayerUpdate::zeroed(0),
+                    nodes: 0,
+                    bits_needed: demand.needed.iter().map(|w| w.count_ones() as u64).sum(),
+                    bits_computed: 0,
+                    work: FillWork::default(),
+                };
+            }
+        }
         let slots: Vec<usize> = (0..BRICK_NODES)
             .filter(|&slot| (0..words).any(|word| needed(slot, word) != 0))
             .collect();
