@@ -4,22 +4,13 @@
 mod anim_support;
 
 use std::path::Path;
-use std::process::{Command, Output};
 
 use serde_json::Value;
-
-fn lmanim(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lmanim"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run lmanim")
-}
 
 fn inspect(args: &[&str], dir: &Path) -> Value {
     let mut all = vec!["inspect"];
     all.extend(args);
-    let output = lmanim(&all, dir);
+    let output = anim_support::lmanim(&all, dir);
     assert!(
         output.status.success(),
         "{}",
@@ -165,14 +156,14 @@ fn bad_input_exits_2_with_one_line_and_rendering_keeps_its_form() {
         &[missing, "--frames", "0"],
     ];
     for args in cases {
-        let output = lmanim(args, dir.path());
+        let output = anim_support::lmanim(args, dir.path());
         let stderr = String::from_utf8_lossy(&output.stderr);
         let lines: Vec<_> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
         assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
         assert_eq!(lines.len(), 1, "{args:?}: {stderr}");
         assert!(output.stdout.is_empty(), "{args:?}");
     }
-    let clip_error = lmanim(&["inspect", path, "--clip", "dance"], dir.path());
+    let clip_error = anim_support::lmanim(&["inspect", path, "--clip", "dance"], dir.path());
     let stderr = String::from_utf8_lossy(&clip_error.stderr);
     assert!(
         stderr.contains("0 (wobble), 1 (pulse), 2 (hop)"),

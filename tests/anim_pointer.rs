@@ -10,25 +10,16 @@
 mod anim_support;
 mod node_support;
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
 
 use lmanim::scene::{CameraProperty, LightProperty, MaterialProperty, Target};
 use serde_json::{json, Value};
-
-fn lmanim(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lmanim"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run lmanim")
-}
 
 /// `lmanim inspect PATH --times TIMES`, its JSON and its stderr.
 fn inspect(path: &Path, times: &str) -> (Value, String) {
     let dir = path.parent().expect("directory");
     let path = path.to_str().expect("utf-8 path");
-    let output = lmanim(&["inspect", path, "--times", times], dir);
+    let output = anim_support::lmanim(&["inspect", path, "--times", times], dir);
     let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
     assert!(output.status.success(), "{stderr}");
     let report = serde_json::from_slice(&output.stdout).expect("JSON on stdout");
@@ -227,22 +218,6 @@ fn reports_without_material_animation_have_no_materials() {
     }
 }
 
-/// `model` written by the builder, with its JSON changed by `edit`.
-fn edited(
-    dir: &Path,
-    name: &str,
-    model: fn(&Path) -> PathBuf,
-    edit: impl FnOnce(&mut Value),
-) -> PathBuf {
-    let written = model(&dir.join(name).with_extension("d"));
-    let mut doc: Value =
-        serde_json::from_slice(&std::fs::read(&written).expect("read")).expect("JSON");
-    edit(&mut doc);
-    let path = dir.join(name);
-    std::fs::write(&path, doc.to_string()).expect("write");
-    path
-}
-
 fn pointer_target(pointer: &str) -> Value {
     json!({ "path": "pointer",
         "extensions": { "KHR_animation_pointer": { "pointer": pointer } } })
@@ -252,7 +227,7 @@ fn pointer_target(pointer: &str) -> Value {
 fn node_channels_written_as_pointers_pose_like_plain_ones() {
     let dir = tempfile::tempdir().expect("tempdir");
     let plain = anim_support::interpolations(dir.path());
-    let as_pointers = edited(
+    let as_pointers = anim_support::edited(
         dir.path(),
         "as_pointers.gltf",
         anim_support::interpolations,
@@ -309,7 +284,7 @@ fn pointers_lmanim_does_not_animate_are_skipped_with_a_warning() {
         ("missing_node.gltf", 5, "/nodes/40/scale", "node 40"),
     ];
     for (name, channel, pointer, reason) in cases {
-        let path = edited(dir.path(), name, anim_support::pointers, |doc| {
+        let path = anim_support::edited(dir.path(), name, anim_support::pointers, |doc| {
             doc["animations"][0]["channels"][channel]["target"] = pointer_target(pointer);
         });
         let scene = lmanim::import::load(&path).expect("the file imports");
@@ -347,7 +322,7 @@ fn pointers_lmanim_does_not_animate_are_skipped_with_a_warning() {
 #[test]
 fn an_animation_of_pointer_channels_only_imports_and_the_extension_may_be_required() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let path = edited(
+    let path = anim_support::edited(
         dir.path(),
         "one_clip_each.gltf",
         anim_support::pointers,

@@ -243,21 +243,6 @@ fn animated_triangle(
     bin.write_embedded(doc, dir, name)
 }
 
-/// A test model of `anim_support` with its JSON edited (the buffer stays
-/// embedded, so accessors keep their data).
-fn edited_model(
-    dir: &Path,
-    name: &str,
-    model: fn(&Path) -> PathBuf,
-    edit: impl FnOnce(&mut Value),
-) -> PathBuf {
-    let written = model(&dir.join(name).with_extension("d"));
-    let mut doc: Value =
-        serde_json::from_slice(&std::fs::read(&written).expect("read")).expect("JSON");
-    edit(&mut doc);
-    write_json(dir, name, &doc)
-}
-
 fn animation_cases(dir: &Path) -> Vec<Case> {
     let case = |path: PathBuf, fault_word| Case { path, fault_word };
     let three = [[0.0; 3], [1.0; 3], [2.0; 3]];
@@ -311,13 +296,13 @@ fn animation_cases(dir: &Path) -> Vec<Case> {
             "no mesh with morph targets",
         ),
         case(
-            edited_model(dir, "joint_past_skin.gltf", anim_support::skinned, |doc| {
+            anim_support::edited(dir, "joint_past_skin.gltf", anim_support::skinned, |doc| {
                 doc["skins"][0]["joints"] = json!([0, 1]);
             }),
             "to joint 2",
         ),
         case(
-            edited_model(
+            anim_support::edited(
                 dir,
                 "inverse_bind_vec3.gltf",
                 anim_support::skinned,
@@ -329,7 +314,7 @@ fn animation_cases(dir: &Path) -> Vec<Case> {
             "expected MAT4 of FLOAT",
         ),
         case(
-            edited_model(
+            anim_support::edited(
                 dir,
                 "joints_without_weights.gltf",
                 anim_support::skinned,
@@ -344,13 +329,13 @@ fn animation_cases(dir: &Path) -> Vec<Case> {
             "JOINTS_0 without WEIGHTS_0",
         ),
         case(
-            edited_model(dir, "mesh_weights_count.gltf", anim_support::morph, |doc| {
+            anim_support::edited(dir, "mesh_weights_count.gltf", anim_support::morph, |doc| {
                 doc["meshes"][0]["weights"] = json!([0.5, 0.5, 0.5]);
             }),
             "3 default weights",
         ),
         case(
-            edited_model(dir, "node_weights_count.gltf", anim_support::morph, |doc| {
+            anim_support::edited(dir, "node_weights_count.gltf", anim_support::morph, |doc| {
                 doc["nodes"][0]["weights"] = json!([0.5]);
             }),
             "node 0 has 1 weights",
@@ -363,7 +348,7 @@ fn animation_cases(dir: &Path) -> Vec<Case> {
 fn pointer_cases(dir: &Path) -> Vec<Case> {
     let case = |path: PathBuf, fault_word| Case { path, fault_word };
     let pointers =
-        |name, edit: fn(&mut Value)| edited_model(dir, name, anim_support::pointers, edit);
+        |name, edit: fn(&mut Value)| anim_support::edited(dir, name, anim_support::pointers, edit);
     vec![
         // The base colour (VEC4) read from the colour's VEC3 sampler.
         case(

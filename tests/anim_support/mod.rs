@@ -565,3 +565,30 @@ pub fn pointers(dir: &Path) -> PathBuf {
     b.write_gltf(&path).expect("write");
     path
 }
+
+/// Runs the `lmanim` binary with `args` in `dir`.
+pub fn lmanim(args: &[&str], dir: &Path) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_lmanim"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run lmanim")
+}
+
+/// A test model of this module (`model`) with its JSON changed by `edit`,
+/// written to `dir/name`; the buffer stays embedded, so accessors keep
+/// their data.
+pub fn edited(
+    dir: &Path,
+    name: &str,
+    model: fn(&Path) -> PathBuf,
+    edit: impl FnOnce(&mut serde_json::Value),
+) -> PathBuf {
+    let written = model(&dir.join(name).with_extension("d"));
+    let mut doc: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&written).expect("read")).expect("JSON");
+    edit(&mut doc);
+    let path = dir.join(name);
+    std::fs::write(&path, doc.to_string()).expect("write");
+    path
+}
