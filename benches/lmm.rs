@@ -6,7 +6,8 @@
 //! corners, for kI = 2.1, 2.5, 3.0.
 //!
 //! `cargo bench --bench lmm` prints Markdown tables (BENCHMARKS.md keeps
-//! them). `LMANIM_BENCH_QUICK=1` runs 480p only.
+//! them). `LMANIM_BENCH_QUICK=1` runs 480p only; `LMANIM_BENCH_LAMPS=64`
+//! and `LMANIM_BENCH_HEIGHT=1080` run one lamp count and one size (and skips the kI table), for profiling one case.
 
 use std::time::Instant;
 
@@ -18,18 +19,30 @@ use lmanim::stats::FrameStats;
 
 fn main() {
     let quick = std::env::var_os("LMANIM_BENCH_QUICK").is_some();
-    let sizes: &[(u32, u32)] = if quick {
-        &[(854, 480)]
-    } else {
-        &[(854, 480), (1920, 1080)]
-    };
+    let only_height: Option<u32> = std::env::var("LMANIM_BENCH_HEIGHT")
+        .ok()
+        .map(|height| height.parse().expect("LMANIM_BENCH_HEIGHT is 480 or 1080"));
+    let sizes: Vec<(u32, u32)> = [(854, 480), (1920, 1080)]
+        .into_iter()
+        .filter(|&(_, height)| match only_height {
+            Some(only) => height == only,
+            None => !quick || height == 480,
+        })
+        .collect();
     let dir = tempfile::tempdir().expect("temporary directory");
     let backend = CpuBackend::new(None).expect("thread pool");
     println!("threads: {}", backend.threads());
     let mut stage_rows = Vec::new();
     println!("| nL | size | method | seconds | vs Whitted | N_pix (points) | N_LM | bits computed | mean p2n tests | shadow rays |");
     println!("|---|---|---|---|---|---|---|---|---|---|");
-    for lamps in [1u32, 4, 16, 64] {
+    let only_lamps: Option<u32> = std::env::var("LMANIM_BENCH_LAMPS")
+        .ok()
+        .map(|lamps| lamps.parse().expect("LMANIM_BENCH_LAMPS is a number"));
+    let lamp_counts: Vec<u32> = match only_lamps {
+        Some(lamps) => vec![lamps],
+        None => vec![1, 4, 16, 64],
+    };
+    for lamps in lamp_counts {
         let path = dir.path().join(format!("city{lamps}.glb"));
         city_block(&CityParams {
             lamps,
@@ -37,7 +50,7 @@ fn main() {
         })
         .and_then(|city| city.write_glb(&path))
         .expect("city scene");
-        for &(width, height) in sizes {
+        for &(width, height) in &sizes {
             let mut whitted_seconds = 0.0;
             for method in [Method::Whitted, Method::Lmm1, Method::Lmm] {
                 let settings = Settings {
@@ -88,6 +101,9 @@ fn main() {
         println!("{row}");
     }
 
+    if only_lamps.is_some() {
+        return;
+    }
     println!();
     println!("| kI | mean candidates (steps 1-2) | mean p2n tests (step 3) | mean interpolation set | paper's mean tests | half-ball volume |");
     println!("|---|---|---|---|---|---|");
