@@ -20,6 +20,7 @@ use crate::accel::Ray;
 use crate::lightmesh::interpolate::{PointCounts, Scratch, Variant};
 use crate::lightmesh::{LightMesh, LightMeshError, LightMeshStats};
 use crate::output::Image;
+use crate::render::omega::LightLanes;
 use crate::render::scatter::secondary_rays;
 use crate::render::surface::ShadingPoint;
 use crate::render::{area, whitted, FrameJob};
@@ -69,9 +70,11 @@ impl CpuBackend {
             let mut pixels = Vec::with_capacity((job.width * job.height) as usize);
             let mut counts = PointCounts::default();
             let mut lightmesh = LightMeshStats::default();
+            let lanes = LightLanes::new(&job.frame.lights);
             for rows in bands(job) {
                 pixels.extend(render_band(
                     job,
+                    &lanes,
                     rows,
                     shading,
                     stats,
@@ -127,6 +130,7 @@ fn bands(job: &FrameJob) -> impl Iterator<Item = std::ops::Range<u32>> {
 
 fn render_band(
     job: &FrameJob,
+    lanes: &LightLanes,
     rows: std::ops::Range<u32>,
     shading: &mut Shading,
     stats: &mut FrameStats,
@@ -166,7 +170,7 @@ fn render_band(
             stats,
             || (),
             |_, _, point| {
-                let (direct, shadow_rays) = whitted::direct_light(point, lights, job.world);
+                let (direct, shadow_rays) = whitted::direct_light(point, lanes, job.world);
                 (direct, PointCounts::shadow_rays(shadow_rays))
             },
         ),
@@ -203,7 +207,7 @@ fn render_band(
                 mesh.shade(
                     point,
                     demand.reach_of(index),
-                    lights,
+                    lanes,
                     job.world,
                     variant,
                     scratch,

@@ -13,7 +13,7 @@ use super::masks::BrickCache;
 use super::LightMesh;
 use crate::accel::offset::offset_ray_origin;
 use crate::accel::{Ray, World};
-use crate::render::light::RenderLight;
+use crate::render::omega::{LightLanes, PointLanes, LANES};
 use crate::render::surface::ShadingPoint;
 use crate::render::whitted;
 
@@ -86,7 +86,7 @@ impl LightMesh {
         &self,
         point: &ShadingPoint,
         reach: &[u64],
-        lights: &[RenderLight],
+        lights: &LightLanes,
         world: &World,
         variant: Variant,
         scratch: &mut Scratch,
@@ -144,25 +144,34 @@ impl LightMesh {
                 any[word] |= seen;
             }
         }
+        // Omega eight lights at a time, for the blocks where some node sees
+        // a light; the sum runs in light order.
+        let at = PointLanes::new(point);
         let mut radiance = Vec3::ZERO;
         for (word, &lit) in any.iter().enumerate() {
-            let mut bits = lit;
-            while bits != 0 {
-                let bit = bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                let Some(omega) = point.omega(&lights[word * 64 + bit]) else {
+            for block_in_word in 0..64 / LANES {
+                let mut lanes = (lit >> (block_in_word * LANES)) as u8;
+                if lanes == 0 {
                     continue;
-                };
-                if all[word] >> bit & 1 == 1 {
-                    radiance += omega;
-                } else {
-                    let seen = visible
-                        .iter()
-                        .skip(word)
-                        .step_by(words)
-                        .filter(|&&seen| seen >> bit & 1 == 1)
-                        .count();
-                    radiance += omega * (seen as f32 / m as f32);
+                }
+                let first = block_in_word * LANES;
+                let omega = lights.omega(&at, word * 64 / LANES + block_in_word);
+                lanes &= omega.reaching;
+                while lanes != 0 {
+                    let lane = lanes.trailing_zeros() as usize;
+                    lanes &= lanes - 1;
+                    let bit = first + lane;
+                    if all[word] >> bit & 1 == 1 {
+                        radiance += omega.get(lane);
+                    } else {
+                        let seen = visible
+                            .iter()
+                            .skip(word)
+                            .step_by(words)
+                            .filter(|&&seen| seen >> bit & 1 == 1)
+                            .count();
+                        radiance += omega.get(lane) * (seen as f32 / m as f32);
+                    }
                 }
             }
         }

@@ -6,7 +6,9 @@
 use std::f32::consts::PI;
 
 use glam::Vec3;
+use wide::f32x8;
 
+use super::lanes::{dot, splat3, Lanes3};
 use super::material::SurfaceMaterial;
 
 /// Schlick's approximation of the Fresnel weight `(1 − cos)^5`.
@@ -88,6 +90,55 @@ impl PointBrdf {
         }
         let metal = specular * (self.base_color + (Vec3::ONE - self.base_color) * fresnel);
         dielectric.lerp(metal, self.metallic)
+    }
+
+    /// f(v, l) for eight unit light directions at once: the arithmetic of
+    /// [`PointBrdf::evaluate`], lane by lane.
+    #[inline]
+    pub fn evaluate_lanes(&self, l: Lanes3) -> Lanes3 {
+        let zero = f32x8::splat(0.0);
+        let one = f32x8::splat(1.0);
+        if self.n_dot_v <= 0.0 {
+            return [zero; 3];
+        }
+        let (n, v) = (splat3(self.n), splat3(self.v));
+        let n_dot_l = dot(n, l);
+        let half = [0, 1, 2].map(|axis| v[axis] + l[axis]);
+        let half_recip = one / dot(half, half).sqrt();
+        // `normalize_or_zero`: a half vector of no length reflects nothing.
+        let has_half = half_recip.simd_lt(f32x8::splat(f32::INFINITY)) & half_recip.simd_gt(zero);
+        let h = half.map(|component| component * half_recip);
+        let n_dot_h = dot(n, h).max(zero);
+        let v_dot_h = dot(v, h).max(zero).min(one);
+
+        let alpha2 = f32x8::splat(self.alpha2);
+        let denominator = n_dot_h * n_dot_h * (alpha2 - one) + one;
+        let distribution = alpha2 / (f32x8::splat(PI) * denominator * denominator);
+        let ggx_v = n_dot_l * f32x8::splat(self.view_smith);
+        let ggx_l =
+            f32x8::splat(self.n_dot_v) * (n_dot_l * n_dot_l * (one - alpha2) + alpha2).sqrt();
+        let sum = ggx_v + ggx_l;
+        let visibility = sum.simd_gt(zero).select(f32x8::splat(0.5) / sum, zero);
+        let specular = distribution * visibility;
+        let complement = one - v_dot_h;
+        let squared = complement * complement;
+        let fresnel = squared * squared * complement;
+
+        let f0 = f32x8::splat(self.dielectric_f0);
+        let dielectric_fresnel = f0 + (f32x8::splat(self.specular) - f0) * fresnel;
+        let reflects = n_dot_l.simd_gt(zero) & has_half;
+        [0, 1, 2].map(|channel| {
+            let dielectric = f32x8::splat(self.diffuse[channel]) * (one - dielectric_fresnel)
+                + specular * dielectric_fresnel;
+            let value = if self.metallic == 0.0 {
+                dielectric
+            } else {
+                let base = f32x8::splat(self.base_color[channel]);
+                let metal = specular * (base + (one - base) * fresnel);
+                dielectric + (metal - dielectric) * f32x8::splat(self.metallic)
+            };
+            reflects.select(value, zero)
+        })
     }
 
     /// Height-correlated Smith G divided by 4 |n·l| |n·v|, as the spec

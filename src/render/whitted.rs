@@ -5,22 +5,28 @@
 
 use glam::Vec3;
 
-use super::light::RenderLight;
+use super::omega::{LightLanes, PointLanes, LANES};
 use super::surface::ShadingPoint;
 use crate::accel::World;
 
 /// Direct light at `point` by formula (1); also returns how many shadow
 /// rays it traced (none for lights that cannot reach the point anyway).
-pub fn direct_light(point: &ShadingPoint, lights: &[RenderLight], world: &World) -> (Vec3, u64) {
+/// Omega comes eight lights at a time; the sum runs in light order.
+pub fn direct_light(point: &ShadingPoint, lights: &LightLanes, world: &World) -> (Vec3, u64) {
     let mut radiance = Vec3::ZERO;
     let mut shadow_rays = 0;
-    for light in lights {
-        let Some(omega) = point.omega(light) else {
-            continue;
-        };
-        shadow_rays += 1;
-        if !world.occluded(&point.shadow_ray(light)) {
-            radiance += omega;
+    let at = PointLanes::new(point);
+    for block in 0..lights.blocks() {
+        let omega = lights.omega(&at, block);
+        let mut lanes = omega.reaching;
+        while lanes != 0 {
+            let lane = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            shadow_rays += 1;
+            let light = &lights.lights()[block * LANES + lane];
+            if !world.occluded(&point.shadow_ray(light)) {
+                radiance += omega.get(lane);
+            }
         }
     }
     (radiance, shadow_rays)
