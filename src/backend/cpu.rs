@@ -194,7 +194,7 @@ fn render_band(
         }
         Shading::LightMesh { mesh, variant } => {
             let start = Instant::now();
-            let demand = mesh.demand(&points, lights)?;
+            let demand = mesh.demand(&points, lanes)?;
             stats.add_stage_time("demand", start.elapsed().as_secs_f64());
 
             let start = Instant::now();

@@ -10,7 +10,7 @@ use rustc_hash::FxHashMap;
 
 use super::masks::{parity, split, BRICK_NODES};
 use super::{LightMesh, LightMeshError};
-use crate::render::light::RenderLight;
+use crate::render::omega::{LightLanes, PointLanes, LANES};
 use crate::render::surface::ShadingPoint;
 
 /// Light bits needed at each node of one brick: `needed[slot * words + w]`
@@ -112,7 +112,7 @@ impl LightMesh {
     pub fn demand(
         &self,
         points: &[ShadingPoint],
-        lights: &[RenderLight],
+        lights: &LightLanes,
     ) -> Result<Demand, LightMeshError> {
         let words = self.masks().words();
         let mut reach = vec![0; points.len() * words];
@@ -173,12 +173,13 @@ impl LightMesh {
 }
 
 /// Sets bit i of `words` when light i can reach `point`.
-fn reaching_lights(point: &ShadingPoint, lights: &[RenderLight], words: &mut [u64]) {
+fn reaching_lights(point: &ShadingPoint, lights: &LightLanes, words: &mut [u64]) {
     words.fill(0);
-    for (index, light) in lights.iter().enumerate() {
-        if light.reaches(point.position, point.geometric_normal, point.shading_normal) {
-            words[index / 64] |= 1 << (index % 64);
-        }
+    let at = PointLanes::new(point);
+    for block in 0..lights.blocks() {
+        let lanes = u64::from(lights.reaching(&at, block));
+        let first = block * LANES;
+        words[first / 64] |= lanes << (first % 64);
     }
 }
 

@@ -116,31 +116,6 @@ impl RenderLight {
         })
     }
 
-    /// Whether the light can send anything to a point at `p` whose geometric
-    /// and shading normals are `ng` and `ns` (visibility aside). It is the
-    /// same test as [`RenderLight::incidence`] plus the two cosines, without
-    /// square roots or divisions for point lights: the light-mesh demand
-    /// stage asks it of every point and light.
-    pub fn reaches(&self, p: Vec3, ng: Vec3, ns: Vec3) -> bool {
-        let to_light = match self.source {
-            LightSource::Point { position } => position - p,
-            LightSource::Directional { towards } => towards,
-            LightSource::Spot { .. } => match self.incidence(p) {
-                Some(incidence) => incidence.direction,
-                None => return false,
-            },
-        };
-        if let (Some(range), LightSource::Point { .. }) = (self.range, self.source) {
-            if to_light.length_squared() >= range * range {
-                return false;
-            }
-        }
-        self.power.max_element() > 0.0
-            && to_light != Vec3::ZERO
-            && ng.dot(to_light) > 0.0
-            && ns.dot(to_light) > 0.0
-    }
-
     /// Inverse-square falloff with glTF's recommended smooth range window.
     fn positional(&self, position: Vec3, p: Vec3) -> Option<(Vec3, Vec3)> {
         let to_light = position - p;

@@ -117,15 +117,39 @@ impl LightLanes {
         self.blocks.len()
     }
 
+    /// Bit per lane of `block`: the light can send something to the point,
+    /// visibility aside (in range, inside its cone, above both the
+    /// geometric and the shading horizon). The light-mesh demand stage asks
+    /// it of every point and light.
+    #[inline]
+    pub fn reaching(&self, point: &PointLanes, block: usize) -> u8 {
+        self.arrival(point, block).reaches.to_bitmask() as u8
+    }
+
     /// Omega of the lights of `block` at the point.
     #[inline]
     pub fn omega(&self, point: &PointLanes, block: usize) -> OmegaBlock {
+        let zero = f32x8::splat(0.0);
+        let arrival = self.arrival(point, block);
+        let reflectance = point.brdf.evaluate_lanes(arrival.direction);
+        let value = [0, 1, 2].map(|c| reflectance[c] * arrival.irradiance[c] * arrival.cos_theta);
+        let brings_light = arrival.reaches & value[0].max(value[1]).max(value[2]).simd_gt(zero);
+        OmegaBlock {
+            value: value.map(|channel| brings_light.select(channel, zero).to_array()),
+            reaching: brings_light.to_bitmask() as u8,
+        }
+    }
+
+    /// What the lights of `block` send towards the point, as
+    /// `RenderLight::incidence` and `ShadingPoint::reaching` compute it.
+    #[inline]
+    fn arrival(&self, point: &PointLanes, block: usize) -> Arrival {
         let light = &self.blocks[block];
         let zero = f32x8::splat(0.0);
         let one = f32x8::splat(1.0);
 
         // Towards the light and the inverse-square falloff with glTF's
-        // range window (as `RenderLight::incidence`).
+        // range window.
         let to_light = [0, 1, 2].map(|axis| {
             light.directional.select(
                 light.origin[axis],
@@ -144,27 +168,40 @@ impl LightLanes {
         let ramp = ((cos_angle - light.cos_outer) / (light.cos_inner - light.cos_outer))
             .max(zero)
             .min(one);
-        let hard = light.cos_inner.simd_le(light.cos_outer).select(
+        let cone = light.cos_inner.simd_le(light.cos_outer).select(
             cos_angle.simd_gt(light.cos_outer).select(one, zero),
             ramp * ramp,
         );
-        let falloff = window / distance_squared * hard;
+        let falloff = window / distance_squared * cone;
         let irradiance = light.power.map(|power| power * falloff);
 
-        // The two cosines of `ShadingPoint::reaching`.
-        let cos_geometric = dot(point.geometric_normal, direction);
         let cos_theta = dot(point.shading_normal, direction);
-        let reflectance = point.brdf.evaluate_lanes(direction);
-        let value = [0, 1, 2].map(|c| reflectance[c] * irradiance[c] * cos_theta);
-        let brings_light = distance_squared.simd_gt(zero)
-            & cos_geometric.simd_gt(zero)
-            & cos_theta.simd_gt(zero)
-            & value[0].max(value[1]).max(value[2]).simd_gt(zero);
-        OmegaBlock {
-            value: value.map(|channel| brings_light.select(channel, zero).to_array()),
-            reaching: brings_light.to_bitmask() as u8,
+        let reaches = distance_squared.simd_gt(zero)
+            & irradiance[0]
+                .max(irradiance[1])
+                .max(irradiance[2])
+                .simd_gt(zero)
+            & dot(point.geometric_normal, direction).simd_gt(zero)
+            & cos_theta.simd_gt(zero);
+        Arrival {
+            direction,
+            irradiance,
+            cos_theta,
+            reaches,
         }
     }
+}
+
+/// Light arriving at a point from eight lights, visibility aside.
+struct Arrival {
+    /// Unit directions towards the lights.
+    direction: Lanes3,
+    /// Irradiance on a surface facing each light.
+    irradiance: Lanes3,
+    /// Cosine with the shading normal.
+    cos_theta: f32x8,
+    /// All bits set where the light reaches the point.
+    reaches: f32x8,
 }
 
 /// The per-point inputs of [`LightLanes::omega`], broadcast once.
@@ -308,6 +345,11 @@ mod tests {
                 for (index, light) in lights.iter().enumerate() {
                     let block = lanes.omega(&at, index / LANES);
                     let lane = index % LANES;
+                    assert_eq!(
+                        lanes.reaching(&at, index / LANES) >> lane & 1 == 1,
+                        point.reaching(light).is_some(),
+                        "light {index} reaching"
+                    );
                     let expected = point.omega(light);
                     assert_eq!(
                         block.reaching >> lane & 1 == 1,
