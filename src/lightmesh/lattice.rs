@@ -4,6 +4,7 @@
 //! same node in every frame and its mask can be reused.
 
 use glam::{IVec3, Vec3};
+use wide::f32x8;
 
 /// Where the lattice origin sits inside a cell, as a fraction of `h` per
 /// axis. Scenes are modelled on round coordinates (floors at y = 0, walls on
@@ -22,6 +23,8 @@ pub const MAX_KI: f32 = 8.0;
 
 /// Most nodes along one axis of a half-ball's box.
 const MAX_SPAN: usize = 2 * MAX_KI as usize + 1;
+/// [`MAX_SPAN`] rounded up to whole rows of eight SIMD lanes.
+const PADDED_SPAN: usize = MAX_SPAN.next_multiple_of(8);
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lattice {
@@ -73,8 +76,9 @@ impl Lattice {
             8.0 * f32::EPSILON * (p.abs().max_element() + self.origin.abs().max_element() + radius);
         // Offsets per axis, computed once: `node_position(node) - p` for
         // each coordinate, exactly as a per-node evaluation would round it.
+        // Slots past the span stay infinite: no ball holds them.
         let offsets = |axis: usize, from: i32, to: i32| {
-            let mut along = [0.0f32; MAX_SPAN];
+            let mut along = [f32::INFINITY; PADDED_SPAN];
             for (slot, index) in along.iter_mut().zip(from..=to) {
                 *slot = (self.origin[axis] + self.h * index as f32) - p[axis];
             }
@@ -86,6 +90,16 @@ impl Lattice {
             offsets(2, low.z, high.z),
         );
         let span = |from: i32, to: i32| (to - from + 1).clamp(0, MAX_SPAN as i32) as usize;
+        // A row of nodes along x is tested eight at a time, with the
+        // arithmetic of `length_squared` and `dot` on each node's offset
+        // (same operations, same order, same rounding).
+        let x_blocks = span(low.x, high.x).div_ceil(8);
+        let x_lanes: [(f32x8, f32x8); PADDED_SPAN / 8] = std::array::from_fn(|block| {
+            let dx = f32x8::new(std::array::from_fn(|lane| x[block * 8 + lane]));
+            (dx * dx, f32x8::splat(n.x) * dx)
+        });
+        let radius_lanes = f32x8::splat(radius_squared);
+        let on_plane_lanes = f32x8::splat(on_plane);
         for (kz, &dz) in z[..span(low.z, high.z)].iter().enumerate() {
             for (jy, &dy) in y[..span(low.y, high.y)].iter().enumerate() {
                 // (x² + y²) + z² ≥ y² + z² in rounded arithmetic too: a row
@@ -93,10 +107,16 @@ impl Lattice {
                 if dy * dy + dz * dz > radius_squared {
                     continue;
                 }
-                for (ix, &dx) in x[..span(low.x, high.x)].iter().enumerate() {
-                    let offset = Vec3::new(dx, dy, dz);
-                    if offset.length_squared() <= radius_squared && n.dot(offset) > on_plane {
-                        out.push(low + IVec3::new(ix as i32, jy as i32, kz as i32));
+                let (dy2, dz2) = (f32x8::splat(dy * dy), f32x8::splat(dz * dz));
+                let (ny, nz) = (f32x8::splat(n.y * dy), f32x8::splat(n.z * dz));
+                for (block, &(dx2, nx)) in x_lanes[..x_blocks].iter().enumerate() {
+                    let inside = (dx2 + dy2 + dz2).simd_le(radius_lanes)
+                        & (nx + ny + nz).simd_gt(on_plane_lanes);
+                    let mut lanes = inside.to_bitmask();
+                    while lanes != 0 {
+                        let ix = block as i32 * 8 + lanes.trailing_zeros() as i32;
+                        lanes &= lanes - 1;
+                        out.push(low + IVec3::new(ix, jy as i32, kz as i32));
                     }
                 }
             }
@@ -138,6 +158,40 @@ mod tests {
             }
         }
         assert_eq!(nodes.len(), brute);
+    }
+
+    proptest::proptest! {
+        /// The rows tested eight nodes at a time find exactly the nodes a
+        /// node-by-node test finds, in (k, j, i) order, for radii up to
+        /// [`MAX_KI`] steps (rows of up to three lane blocks).
+        #[test]
+        fn half_ball_equals_the_node_by_node_test(
+            p in proptest::array::uniform3(-40.0f32..40.0),
+            n in proptest::array::uniform3(-1.0f32..1.0),
+            h in 0.05f32..2.0,
+            ki in 1.0f32..MAX_KI,
+        ) {
+            let (p, n) = (Vec3::from(p), Vec3::from(n).normalize_or(Vec3::Y));
+            let lattice = Lattice::new(h);
+            let radius = ki * h;
+            let mut nodes = Vec::new();
+            lattice.half_ball(p, n, radius, &mut nodes);
+            let centre = ((p - lattice.origin) / h).round().as_ivec3();
+            let reach = MAX_KI as i32 + 1;
+            let mut brute = Vec::new();
+            for k in -reach..=reach {
+                for j in -reach..=reach {
+                    for i in -reach..=reach {
+                        let node = centre + IVec3::new(i, j, k);
+                        let offset = lattice.node_position(node) - p;
+                        if offset.length_squared() <= radius * radius && n.dot(offset) > 0.0 {
+                            brute.push(node);
+                        }
+                    }
+                }
+            }
+            proptest::prop_assert_eq!(nodes, brute);
+        }
     }
 
     #[test]
