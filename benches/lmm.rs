@@ -2,6 +2,10 @@
 //! on the generated city block for nL = 1, 4, 16, 64 street lamps at 480p
 //! and 1080p, one cold frame each, with N_LM against N_pix.
 //!
+//! Then LMM1 at 64 lamps on lattices 1.5, 2 and 3 times coarser than the
+//! default h: what the speed-up costs in penumbra accuracy is in the
+//! penumbra bench's table at the same ratios.
+//!
 //! Then the paper's table of step-3 tests per point, on the city's walls and
 //! corners, for kI = 2.1, 2.5, 3.0.
 //!
@@ -9,6 +13,7 @@
 //! them). `LMANIM_BENCH_QUICK=1` runs 480p only; `LMANIM_BENCH_LAMPS=64`
 //! and `LMANIM_BENCH_HEIGHT=1080` run one lamp count and one size (and skips the kI table), for profiling one case.
 
+use std::path::Path;
 use std::time::Instant;
 
 use lmanim::authoring::city::{city_block, CityParams};
@@ -33,6 +38,8 @@ fn main() {
     let backend = CpuBackend::new(None).expect("thread pool");
     println!("threads: {}", backend.threads());
     let mut stage_rows = Vec::new();
+    // The 64-lamp LMM1 case at the largest size, for the lattice sweep.
+    let mut coarser = None;
     println!("| nL | size | method | seconds | vs Whitted | N_pix (points) | N_LM | bits computed | mean p2n tests | shadow rays |");
     println!("|---|---|---|---|---|---|---|---|---|---|");
     let only_lamps: Option<u32> = std::env::var("LMANIM_BENCH_LAMPS")
@@ -59,18 +66,14 @@ fn main() {
                     method,
                     ..Settings::default()
                 };
-                let mut sequence = Sequence::load(&path).expect("city loads");
-                let placed = sequence.place(&settings).expect("camera");
-                let mut stats = FrameStats::default();
-                let start = Instant::now();
-                sequence
-                    .render(&backend, &placed, &settings, &mut stats)
-                    .expect("frame renders");
-                let seconds = start.elapsed().as_secs_f64();
+                let (seconds, stats) = render_cold(&backend, &path, &settings);
                 if method == Method::Whitted {
                     whitted_seconds = seconds;
                 }
                 let mesh = stats.lightmesh.unwrap_or_default();
+                if (lamps, method) == (64, Method::Lmm1) {
+                    coarser = Some((path.clone(), settings.clone(), whitted_seconds, mesh.h));
+                }
                 println!(
                     "| {lamps} | {height}p | {method} | {seconds:.2} | {:.1}× | {} | {} | {} | {:.1} | {} |",
                     whitted_seconds / seconds,
@@ -101,6 +104,30 @@ fn main() {
         println!("{row}");
     }
 
+    if let Some((path, settings, whitted_seconds, default_h)) = coarser {
+        println!();
+        println!(
+            "LMM1 at 64 lamps, {}p, on coarser lattices (Whitted: {whitted_seconds:.2} s):",
+            settings.height
+        );
+        println!();
+        println!("| h / default h | h (m) | seconds | vs Whitted | N_LM | bits computed |");
+        println!("|---|---|---|---|---|---|");
+        for scale in [1.5f32, 2.0, 3.0] {
+            let mut settings = settings.clone();
+            settings.lightmesh.h = Some(default_h * scale);
+            let (seconds, stats) = render_cold(&backend, &path, &settings);
+            let mesh = stats.lightmesh.unwrap_or_default();
+            println!(
+                "| {scale} | {:.3} | {seconds:.2} | {:.1}× | {} | {} |",
+                mesh.h,
+                whitted_seconds / seconds,
+                mesh.nodes_computed,
+                mesh.bits_computed
+            );
+        }
+    }
+
     if only_lamps.is_some() {
         return;
     }
@@ -116,12 +143,7 @@ fn main() {
             ..Settings::default()
         };
         settings.lightmesh.ki = ki;
-        let mut sequence = Sequence::load(&path).expect("city loads");
-        let placed = sequence.place(&settings).expect("camera");
-        let mut stats = FrameStats::default();
-        sequence
-            .render(&backend, &placed, &settings, &mut stats)
-            .expect("frame renders");
+        let (_, stats) = render_cold(&backend, &path, &settings);
         let mesh = stats.lightmesh.unwrap_or_default();
         let volume = 2.0 / 3.0 * std::f64::consts::PI * f64::from(ki).powi(3);
         println!(
@@ -129,4 +151,16 @@ fn main() {
             mesh.mean_candidates, mesh.mean_p2n_tests, mesh.mean_interp_set
         );
     }
+}
+
+/// One frame of the scene at `path`, from scratch: its time and statistics.
+fn render_cold(backend: &CpuBackend, path: &Path, settings: &Settings) -> (f64, FrameStats) {
+    let mut sequence = Sequence::load(path).expect("city loads");
+    let placed = sequence.place(settings).expect("camera");
+    let mut stats = FrameStats::default();
+    let start = Instant::now();
+    sequence
+        .render(backend, &placed, settings, &mut stats)
+        .expect("frame renders");
+    (start.elapsed().as_secs_f64(), stats)
 }
