@@ -89,7 +89,20 @@ fn main() {
                         .iter()
                         .map(|(stage, seconds)| format!("{stage} {seconds:.2}"))
                         .collect();
-                    stage_rows.push(format!("| {height}p | {method} | {} |", stages.join(", ")));
+                    let fill = match stats.lightmesh {
+                        Some(mesh) => format!(
+                            "{} shafts, {} segments ({} remembered), {} hidden groups",
+                            mesh.fill_shafts,
+                            mesh.fill_segments,
+                            mesh.fill_remembered,
+                            mesh.fill_hidden_groups
+                        ),
+                        None => "—".to_string(),
+                    };
+                    stage_rows.push(format!(
+                        "| {height}p | {method} | {} | {fill} |",
+                        stages.join(", ")
+                    ));
                 }
             }
         }
@@ -98,8 +111,8 @@ fn main() {
     println!();
     println!("Stage seconds at 64 lamps:");
     println!();
-    println!("| size | method | stages |");
-    println!("|---|---|---|");
+    println!("| size | method | stages | fill work |");
+    println!("|---|---|---|---|");
     for row in stage_rows {
         println!("{row}");
     }

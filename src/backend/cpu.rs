@@ -164,7 +164,7 @@ fn render_band(
 
     let lights = &job.frame.lights;
     let segments_before = lightmesh.fill_segments;
-    let shaded: Vec<(Vec3, PointCounts)> = match shading {
+    let (shaded, band_counts): (Vec<Vec3>, PointCounts) = match shading {
         Shading::Whitted => shade_stage(
             &points,
             stats,
@@ -215,10 +215,6 @@ fn render_band(
             })
         }
     };
-    let mut band_counts = PointCounts::default();
-    for (_, point_counts) in &shaded {
-        band_counts += *point_counts;
-    }
     // Every occlusion segment is a shadow ray: formula (1)'s, the fill's
     // node-to-light ones and LMM's point-to-node tests.
     stats.rays.shadow +=
@@ -228,7 +224,7 @@ fn render_band(
 
     let start = Instant::now();
     let mut radiance = vec![Vec3::ZERO; band_samples];
-    for (point, (value, _)) in points.iter().zip(&shaded) {
+    for (point, value) in points.iter().zip(&shaded) {
         radiance[point.sample as usize] += *value;
     }
     let spp = job.spp as usize;
@@ -247,24 +243,37 @@ fn render_band(
 
 /// The last stage before resolve: every point's emission plus its direct
 /// light by `direct` (formula (1), (2) or the lamp estimate), weighted by
-/// its path throughput. `init` makes per-thread scratch space.
+/// its path throughput, and what shading them cost. `init` makes
+/// per-thread scratch space. Counts are integers, so summing them in any
+/// order gives the same totals.
 fn shade_stage<S>(
     points: &[ShadingPoint],
     stats: &mut FrameStats,
     init: impl Fn() -> S + Send + Sync,
     direct: impl Fn(&mut S, usize, &ShadingPoint) -> (Vec3, PointCounts) + Send + Sync,
-) -> Vec<(Vec3, PointCounts)> {
+) -> (Vec<Vec3>, PointCounts) {
+    const CHUNK: usize = 1024;
     let start = Instant::now();
-    let shaded = points
-        .par_iter()
+    let mut shaded = vec![Vec3::ZERO; points.len()];
+    let counts = shaded
+        .par_chunks_mut(CHUNK)
+        .zip(points.par_chunks(CHUNK))
         .enumerate()
-        .map_init(init, |scratch, (index, point)| {
-            let (light, counts) = direct(scratch, index, point);
-            (point.weight * (point.emitted() + light), counts)
+        .map_init(init, |scratch, (chunk, (out, points))| {
+            let mut counts = PointCounts::default();
+            for (offset, (value, point)) in out.iter_mut().zip(points).enumerate() {
+                let (light, point_counts) = direct(scratch, chunk * CHUNK + offset, point);
+                *value = point.weight * (point.emitted() + light);
+                counts += point_counts;
+            }
+            counts
         })
-        .collect();
+        .reduce(PointCounts::default, |mut a, b| {
+            a += b;
+            a
+        });
     stats.add_stage_time("shade", start.elapsed().as_secs_f64());
-    shaded
+    (shaded, counts)
 }
 
 /// Stage 1: camera rays of every sample in the band, tile by tile.

@@ -53,6 +53,13 @@ impl Lattice {
         far.max_element() < MAX_NODE_COORDINATE
     }
 
+    /// How far from the tangent plane at `p` a node still counts as on it
+    /// (see [`Lattice::half_ball`]): the rounding of node positions and
+    /// surface points of this magnitude.
+    fn on_plane_tolerance(&self, p: Vec3, radius: f32) -> f32 {
+        8.0 * f32::EPSILON * (p.abs().max_element() + self.origin.abs().max_element() + radius)
+    }
+
     /// Steps 1 and 2 of the paper: the nodes `x` with `|x − p| ≤ radius` and
     /// `(n, x − p) > 0`, appended to `out` in a fixed order (k, j, i).
     /// A node on the tangent plane (including `p` itself when it is a node)
@@ -72,8 +79,7 @@ impl Lattice {
         let low = (local - Vec3::splat(reach)).ceil().as_ivec3();
         let high = (local + Vec3::splat(reach)).floor().as_ivec3();
         let radius_squared = radius * radius;
-        let on_plane =
-            8.0 * f32::EPSILON * (p.abs().max_element() + self.origin.abs().max_element() + radius);
+        let on_plane = self.on_plane_tolerance(p, radius);
         // Offsets per axis, computed once: `node_position(node) - p` for
         // each coordinate, exactly as a per-node evaluation would round it.
         // Slots past the span stay infinite: no ball holds them.
@@ -184,7 +190,9 @@ mod tests {
                     for i in -reach..=reach {
                         let node = centre + IVec3::new(i, j, k);
                         let offset = lattice.node_position(node) - p;
-                        if offset.length_squared() <= radius * radius && n.dot(offset) > 0.0 {
+                        if offset.length_squared() <= radius * radius
+                            && n.dot(offset) > lattice.on_plane_tolerance(p, radius)
+                        {
                             brute.push(node);
                         }
                     }

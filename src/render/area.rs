@@ -92,7 +92,7 @@ pub fn sample_light(point: &ShadingPoint, light: &RenderLight, u: Vec2) -> Optio
     if cos_surface <= 0.0 {
         return None;
     }
-    let reflectance = point.brdf.evaluate(direction);
+    let reflectance = point.brdf().evaluate(direction);
     // f · L · cos / pdf with L = E d² / (π R²) and 1/pdf = 2π (1 − cos θmax):
     // since 1 − cos θmax = (R²/d²) / (1 + cos θmax), the radii cancel and
     // the weight is 2 / (1 + cos θmax), which tends to 1 (the point light)
@@ -179,7 +179,6 @@ impl Cone {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::brdf::PointBrdf;
     use crate::render::light::LightSource;
     use crate::render::material::SurfaceMaterial;
 
@@ -202,7 +201,6 @@ mod tests {
             shading_normal: normal,
             front_face: true,
             view: normal,
-            brdf: PointBrdf::new(&material, normal, normal),
             material,
         }
     }

@@ -206,21 +206,21 @@ struct Arrival {
     reaches: f32x8,
 }
 
-/// The per-point inputs of [`LightLanes::omega`], broadcast once.
-pub struct PointLanes<'a> {
+/// The per-point inputs of [`LightLanes::omega`], prepared once.
+pub struct PointLanes {
     position: Lanes3,
     geometric_normal: Lanes3,
     shading_normal: Lanes3,
-    brdf: &'a PointBrdf,
+    brdf: PointBrdf,
 }
 
-impl<'a> PointLanes<'a> {
-    pub fn new(point: &'a ShadingPoint) -> PointLanes<'a> {
+impl PointLanes {
+    pub fn new(point: &ShadingPoint) -> PointLanes {
         PointLanes {
             position: splat3(point.position),
             geometric_normal: splat3(point.geometric_normal),
             shading_normal: splat3(point.shading_normal),
-            brdf: &point.brdf,
+            brdf: point.brdf(),
         }
     }
 }
@@ -281,7 +281,6 @@ mod tests {
             shading_normal: normal,
             front_face: true,
             view,
-            brdf: PointBrdf::new(&material, normal, view),
             material,
         }
     }

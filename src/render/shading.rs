@@ -32,7 +32,7 @@ impl ShadingPoint {
     #[inline]
     pub fn omega(&self, light: &RenderLight) -> Option<Vec3> {
         let (incidence, cos_theta) = self.reaching(light)?;
-        let reflectance = self.brdf.evaluate(incidence.direction);
+        let reflectance = self.brdf().evaluate(incidence.direction);
         let value = reflectance * incidence.irradiance * cos_theta;
         (value.max_element() > 0.0).then_some(value)
     }

@@ -32,11 +32,16 @@ pub struct ShadingPoint {
     /// Unit direction from the point back along the incoming ray.
     pub view: Vec3,
     pub material: SurfaceMaterial,
-    /// The material's BRDF at this point, prepared for many lights.
-    pub brdf: PointBrdf,
 }
 
 impl ShadingPoint {
+    /// The material's BRDF at this point, prepared for many lights. It is
+    /// made where shading starts rather than stored: the points of a band
+    /// are hundreds of megabytes, and this would be two fifths of them.
+    pub fn brdf(&self) -> PointBrdf {
+        PointBrdf::new(&self.material, self.shading_normal, self.view)
+    }
+
     pub fn from_hit(
         scene: &SceneDesc,
         frame: &FrameScene,
@@ -102,7 +107,6 @@ impl ShadingPoint {
             shading_normal,
             front_face,
             view: towards_viewer,
-            brdf: PointBrdf::new(&material, shading_normal, towards_viewer),
             material,
         }
     }
