@@ -362,7 +362,7 @@ fn check_geometry(geometry: &Geometry) -> Result<(), String> {
             geometry.uvs.len()
         ));
     }
-    if geometry.indices.len() % 3 != 0 {
+    if !geometry.indices.len().is_multiple_of(3) {
         return Err(format!(
             "{} indices do not make whole triangles",
             geometry.indices.len()

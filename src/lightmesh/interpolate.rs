@@ -13,7 +13,7 @@ use super::masks::BrickCache;
 use super::LightMesh;
 use crate::accel::offset::offset_ray_origin;
 use crate::accel::{Ray, World};
-use crate::render::omega::{LightLanes, PointLanes, LANES};
+use crate::render::omega::{set_lanes, LightLanes, PointLanes, LANES};
 use crate::render::surface::ShadingPoint;
 use crate::render::whitted;
 
@@ -150,16 +150,13 @@ impl LightMesh {
         let mut radiance = Vec3::ZERO;
         for (word, &lit) in any.iter().enumerate() {
             for block_in_word in 0..64 / LANES {
-                let mut lanes = (lit >> (block_in_word * LANES)) as u8;
-                if lanes == 0 {
+                let first = block_in_word * LANES;
+                let lit_lanes = (lit >> first) as u8;
+                if lit_lanes == 0 {
                     continue;
                 }
-                let first = block_in_word * LANES;
                 let omega = lights.omega(&at, word * 64 / LANES + block_in_word);
-                lanes &= omega.reaching;
-                while lanes != 0 {
-                    let lane = lanes.trailing_zeros() as usize;
-                    lanes &= lanes - 1;
+                for lane in set_lanes(lit_lanes & omega.reaching) {
                     let bit = first + lane;
                     if all[word] >> bit & 1 == 1 {
                         radiance += omega.get(lane);

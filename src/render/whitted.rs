@@ -5,7 +5,7 @@
 
 use glam::Vec3;
 
-use super::omega::{LightLanes, PointLanes, LANES};
+use super::omega::{set_lanes, LightLanes, PointLanes, LANES};
 use super::surface::ShadingPoint;
 use crate::accel::World;
 
@@ -18,10 +18,7 @@ pub fn direct_light(point: &ShadingPoint, lights: &LightLanes, world: &World) ->
     let at = PointLanes::new(point);
     for block in 0..lights.blocks() {
         let omega = lights.omega(&at, block);
-        let mut lanes = omega.reaching;
-        while lanes != 0 {
-            let lane = lanes.trailing_zeros() as usize;
-            lanes &= lanes - 1;
+        for lane in set_lanes(omega.reaching) {
             shadow_rays += 1;
             let light = &lights.lights()[block * LANES + lane];
             if !world.occluded(&point.shadow_ray(light)) {

@@ -48,7 +48,7 @@ impl Bin {
 
     /// Appends `data` as a buffer view (4-byte aligned); returns its index.
     pub fn view(&mut self, data: &[u8]) -> usize {
-        while self.bytes.len() % 4 != 0 {
+        while !self.bytes.len().is_multiple_of(4) {
             self.bytes.push(0);
         }
         self.views.push(json!({
@@ -126,7 +126,7 @@ impl Bin {
     /// `doc` with this buffer's views and accessors and a buffer entry
     /// `buffer` (its `uri`, or none for a .glb).
     fn into_document(mut self, mut doc: Value, buffer: Value) -> (Value, Vec<u8>) {
-        while self.bytes.len() % 4 != 0 {
+        while !self.bytes.len().is_multiple_of(4) {
             self.bytes.push(0);
         }
         let mut buffer = buffer;
@@ -191,7 +191,7 @@ impl Bin {
 /// A .glb container: header, JSON chunk (space-padded), BIN chunk.
 pub fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
     let mut json = json.to_vec();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let length = 12 + 8 + json.len() + 8 + bin.len();
