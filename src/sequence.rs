@@ -215,7 +215,9 @@ impl Sequence {
     /// brings the world and the light mesh up to date with what changed
     /// since the previous frame: moved dynamic objects get new instance
     /// transforms, deformed ones new positions, and the light mesh drops
-    /// the bits their old and new bounds (and moved lights) can affect.
+    /// the bits that the changed geometry (the old and new bounds of moved
+    /// objects, the old and new boxes of the moved parts of deformed ones)
+    /// and moved lights can affect.
     /// `stats` gets the change summary and the invalidation's cost.
     pub fn advance(
         &mut self,
@@ -247,35 +249,10 @@ impl Sequence {
             .collect();
         changed.sort_unstable();
         changed.dedup();
-        let mut regions = Vec::new();
-        for object in changed {
-            let before = self.world.object_bounds(object);
-            let update = match &placed.deformed[object] {
-                Some(mesh) if delta.objects_deformed.contains(&object) => {
-                    self.world.set_positions(object, &mesh.positions)
-                }
-                _ => Ok(()),
-            }
-            .and_then(|()| {
-                self.world
-                    .set_transform(object, placed.objects[object].to_render)
-            });
-            // Static objects never move; an update refused for one means the
-            // scene model and the world disagree, which only a bug can cause.
-            debug_assert!(
-                update.is_ok(),
-                "world update of object {object}: {update:?}"
-            );
-            regions.extend(
-                before
-                    .into_iter()
-                    .chain(self.world.object_bounds(object))
-                    .map(|b| ChangedRegion {
-                        min: b.min,
-                        max: b.max,
-                    }),
-            );
-        }
+        let regions: Vec<ChangedRegion> = changed
+            .into_iter()
+            .flat_map(|object| self.update_object(object, &placed, &delta))
+            .collect();
         if let (Some(mesh), Some(_), Some(previous)) =
             (&self.light_mesh, &self.cache_dir, &self.previous)
         {
@@ -296,6 +273,48 @@ impl Sequence {
         self.still = self.previous.is_some() && delta.is_still();
         self.previous = Some(placed.clone());
         Ok(placed)
+    }
+
+    /// Brings one moved or deformed object of the world up to `placed`
+    /// and returns where its geometry changed. A rigid move changes all of
+    /// it: its old and its new bounds. A deformation in place changes only
+    /// the triangles whose vertices moved: the old and new boxes of the
+    /// object's clusters that hold them (see `accel::clusters`), much
+    /// tighter around a swaying crown than its whole box.
+    fn update_object(
+        &mut self,
+        object: usize,
+        placed: &FrameScene,
+        delta: &FrameDelta,
+    ) -> Vec<ChangedRegion> {
+        let before = self.world.object_bounds(object);
+        let update = match &placed.deformed[object] {
+            Some(mesh) if delta.objects_deformed.contains(&object) => {
+                self.world.set_positions(object, &mesh.positions)
+            }
+            _ => Ok(Vec::new()),
+        }
+        .and_then(|deformed| {
+            self.world
+                .set_transform(object, placed.objects[object].to_render)
+                .map(|()| deformed)
+        });
+        // Static objects never move; an update refused for one means the
+        // scene model and the world disagree, which only a bug can cause.
+        debug_assert!(
+            update.is_ok(),
+            "world update of object {object}: {update:?}"
+        );
+        let changed = match update {
+            Ok(parts) if !delta.objects_moved.contains(&object) => parts,
+            // A rigid move changes everything; so, to stay safe, does an
+            // update the world refused.
+            _ => before
+                .into_iter()
+                .chain(self.world.object_bounds(object))
+                .collect(),
+        };
+        changed.into_iter().map(ChangedRegion::from).collect()
     }
 
     /// Renders one frame into an image, filling `stats`.

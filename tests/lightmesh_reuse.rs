@@ -1,10 +1,13 @@
 //! Light-mesh masks kept across frames equal masks computed cold: after a
 //! dynamic object moves (a truck passing between a lamp and a facade more
-//! than 15 m from the truck) or a light moves, invalidation drops exactly
-//! enough bits that re-filling them reproduces a cold fill, bit for bit.
+//! than 15 m from the truck), deforms (a sheet whose one half a morph
+//! target bends) or a light moves, invalidation drops exactly enough bits
+//! that re-filling them reproduces a cold fill, bit for bit.
+
+mod common;
 
 use glam::{Affine3A, IVec3, Vec3};
-use lmanim::accel::{World, WorldObject};
+use lmanim::accel::{Bounds, World, WorldObject};
 use lmanim::lightmesh::demand::{BrickDemand, Demand};
 use lmanim::lightmesh::invalidate::ChangedRegion;
 use lmanim::lightmesh::lattice::Lattice;
@@ -84,23 +87,24 @@ impl Street {
     }
 
     fn world(&self, truck: Affine3A) -> World {
-        fn object(
-            mesh: &(Vec<Vec3>, Vec<[u32; 3]>),
-            to_render: Affine3A,
-            dynamic: bool,
-        ) -> WorldObject<'_> {
-            WorldObject {
-                positions: &mesh.0,
-                triangles: &mesh.1,
-                to_render,
-                dynamic,
-            }
-        }
         World::build(&[
             object(&self.ground, Affine3A::IDENTITY, false),
             object(&self.facade, Affine3A::IDENTITY, false),
             object(&self.truck, truck, true),
         ])
+    }
+}
+
+fn object(
+    mesh: &(Vec<Vec3>, Vec<[u32; 3]>),
+    to_render: Affine3A,
+    dynamic: bool,
+) -> WorldObject<'_> {
+    WorldObject {
+        positions: &mesh.0,
+        triangles: &mesh.1,
+        to_render,
+        dynamic,
     }
 }
 
@@ -341,4 +345,123 @@ fn shaft_settled_bits_equal_single_segments() {
         stats.fill_segments,
         stats.bits_computed
     );
+}
+
+/// Bounds of the sheet's vertices on one side of z = 0.
+fn half_bounds(positions: &[Vec3], moving: bool) -> ChangedRegion {
+    region(Bounds::from_points(
+        positions.iter().copied().filter(|p| (p.z > 0.0) == moving),
+    ))
+}
+
+/// A sheet between lamp 0 and the facade, whose z > 0 half a morph target
+/// bends down (its top edge sinks up to 1 m) while the other half stays:
+/// only the moving half's clusters give changed regions, segments through
+/// the still half alone keep their bits (the sheet's box would have
+/// dropped them), and what is dropped refills to the cold masks.
+///
+/// Mutation tried: `TriangleClusters::changed` giving only each cluster's
+/// box at the new positions (the old-position boxes dropped) fails the
+/// check that the boxes hold every old triangle, and without that check
+/// the reused masks differ from the cold ones: segments that the sinking
+/// edge uncovered keep their stale "blocked" bits.
+#[test]
+fn a_half_bent_sheet_drops_only_the_bits_its_moving_half_can_change() {
+    let street = Street::new();
+    let sheet = common::half_morphing_sheet(15.0, 3.0, 3.5, 0.25, 1.0);
+    let bent = lmanim::anim::deform(&sheet, &[1.0], None).positions;
+    let sheet_mesh = (sheet.positions.clone(), sheet.triangles.clone());
+    let mut world = World::build(&[
+        object(&street.ground, Affine3A::IDENTITY, false),
+        object(&street.facade, Affine3A::IDENTITY, false),
+        object(&sheet_mesh, Affine3A::IDENTITY, true),
+    ]);
+    let lights = vec![lamp(Vec3::new(0.0, 5.0, 0.0))];
+    let lattice = Lattice::new(H);
+    let demand = facade_demand(&lattice, lights.len());
+    let mut reused = mesh(lights.len());
+    reused
+        .fill(&demand, &lights, &world, &mut LightMeshStats::default())
+        .unwrap();
+    let before = masks_of(&reused, &demand, lights.len());
+
+    let sheet_before = world.object_bounds(2).unwrap();
+    let boxes = world.set_positions(2, &bent).unwrap();
+    assert!(!boxes.is_empty());
+    assert!(
+        boxes.iter().all(|b| b.min.z >= 0.0),
+        "only the moving half changed: {boxes:?}"
+    );
+    for triangle in &sheet.triangles {
+        let corners = |positions: &[Vec3]| triangle.map(|v| positions[v as usize]);
+        if corners(&sheet.positions) == corners(&bent) {
+            continue;
+        }
+        for corners in [corners(&sheet.positions), corners(&bent)] {
+            let held = |b: &Bounds| {
+                corners
+                    .iter()
+                    .all(|p| p.cmpge(b.min).all() && p.cmple(b.max).all())
+            };
+            assert!(boxes.iter().any(held), "{corners:?} is in a changed box");
+        }
+    }
+
+    let sheet_box = [
+        region(sheet_before),
+        region(world.object_bounds(2).unwrap()),
+    ];
+    let mut whole = reused.clone();
+    let dropped_by_box = whole.invalidate(&sheet_box, &[], &lights);
+    let changed: Vec<ChangedRegion> = boxes.iter().map(|&b| ChangedRegion::from(b)).collect();
+    let dropped = reused.invalidate(&changed, &[], &lights);
+    assert!(
+        0 < dropped && dropped < dropped_by_box,
+        "{dropped} bits dropped, {dropped_by_box} by the sheet's box"
+    );
+
+    let still = half_bounds(&sheet.positions, false);
+    let (moving_before, moving_after) = (
+        half_bounds(&sheet.positions, true),
+        half_bounds(&bent, true),
+    );
+    let mut kept = 0;
+    for brick in &demand.bricks {
+        for slot in 0..BRICK_NODES {
+            let node = join(brick.brick, slot);
+            let segment = lights[0].shadow_ray(lattice.node_position(node));
+            let sees_past_statics = reused
+                .masks()
+                .node(node)
+                .is_some_and(|mask| mask.static_layer(0).0 & 1 == 1);
+            if sees_past_statics
+                && still.meets(&segment)
+                && !moving_before.meets(&segment)
+                && !moving_after.meets(&segment)
+            {
+                assert_eq!(whole.masks().get(node, 0), None, "the box drops {node}");
+                assert!(
+                    reused.masks().get(node, 0).is_some(),
+                    "{node} keeps its bit"
+                );
+                kept += 1;
+            }
+        }
+    }
+    assert!(kept > 20, "{kept} segments cross the still half alone");
+
+    let mut refill = LightMeshStats::default();
+    reused.fill(&demand, &lights, &world, &mut refill).unwrap();
+    assert_eq!(refill.bits_computed, dropped);
+    let mut cold = mesh(lights.len());
+    cold.fill(&demand, &lights, &world, &mut LightMeshStats::default())
+        .unwrap();
+    let after = masks_of(&reused, &demand, lights.len());
+    assert_eq!(
+        after,
+        masks_of(&cold, &demand, lights.len()),
+        "reused masks equal cold ones"
+    );
+    let uncovered = before.iter().zip(&after).filter(|(a, b)| a != b).count();
+    assert!(uncovered > 10, "the sinking edge uncovers {uncovered} bits");
 }

@@ -1,7 +1,7 @@
 //! Frames rendered in a sequence, reusing the light mesh's masks, equal the
 //! same frames rendered cold, bit for bit — with a truck passing between a
 //! lamp and a facade more than 15 m from it, a moving light and a moving
-//! camera. Camera-only animation recomputes no bit; a still sequence copies
+//! camera, or a sheet that a morph target bends on one side only. Camera-only animation recomputes no bit; a still sequence copies
 //! its frames. Animated light colours and intensities, material factors
 //! and fields of view (KHR_animation_pointer) re-render every frame but
 //! invalidate and recompute no bit.
@@ -316,5 +316,49 @@ fn field_of_view_animation_moves_the_camera_and_invalidates_nothing() {
         assert_eq!(stats.bits_invalidated, 0, "t = {time}");
         assert_ne!(*image, frames[index - 1].0, "t = {time}");
         assert_eq!(*image, rendered_cold(&scene, &settings, time), "t = {time}");
+    }
+}
+
+/// The still street with a sheet between lamp 0 and the facade, whose
+/// z > 0 half a morph target bends down frame by frame (its other half
+/// stays): the deformed object's changed regions are its moving clusters'
+/// boxes, and every frame rendered with reused masks equals the same frame
+/// rendered cold.
+#[test]
+fn a_mesh_deforming_in_part_renders_every_frame_like_cold() {
+    let mut scene = street(false, false, false);
+    scene
+        .meshes
+        .push(half_morphing_sheet(15.0, 3.0, 3.5, 0.25, 1.5));
+    let sheet = add_node(&mut scene, DMat4::IDENTITY);
+    scene.nodes[sheet].mesh = Some(scene.meshes.len() - 1);
+    scene.nodes[sheet].deforms = true;
+    scene.animations.push(AnimationClip {
+        name: Some("bend".into()),
+        channels: vec![keyed(
+            Target::Weights(sheet),
+            Interpolation::Linear,
+            &[0.0, 0.5, 1.0, 0.25],
+        )],
+    });
+    for method in [Method::Lmm1, Method::Lmm] {
+        let settings = settings_for(method);
+        let frames = rendered_in_sequence(&scene, &settings);
+        for (&time, (image, stats)) in TIMES.iter().zip(&frames) {
+            assert_eq!(
+                *image,
+                rendered_cold(&scene, &settings, time),
+                "{method} at t = {time}"
+            );
+            if time > 0.0 {
+                assert_eq!((stats.objects_moved, stats.camera_moved), (1, false));
+                assert!(
+                    stats.bits_invalidated > 0,
+                    "the bending drops bits at t = {time}"
+                );
+                assert!(stats.lightmesh.unwrap().bits_reused > 0);
+            }
+        }
+        assert_ne!(frames[0].0, frames[2].0, "the bent half's shadow moves");
     }
 }

@@ -7,6 +7,7 @@
 use glam::{Affine3A, Mat3, Vec3};
 
 use super::bounds::Bounds;
+use super::clusters::TriangleClusters;
 use super::mesh_bvh::{BuildTriangle, Layout, MeshBvh, MeshHit, TriangleRef};
 use super::Ray;
 use super::BUILD_PARAMS;
@@ -26,6 +27,9 @@ pub struct Instance {
     /// `det(M) M^-T`, which keeps orientation under mirroring transforms.
     normal_to_render: Mat3,
     object_bounds: Bounds,
+    /// Fixed clusters of `triangles`, to tell where a deformation changed
+    /// the object.
+    clusters: TriangleClusters,
 }
 
 impl Instance {
@@ -39,6 +43,7 @@ impl Instance {
         let mut instance = Instance {
             object,
             object_bounds: bounds_of(&bvh),
+            clusters: TriangleClusters::new(positions, &triangles),
             bvh,
             triangles,
             positions: positions.to_vec(),
@@ -72,7 +77,13 @@ impl Instance {
 
     /// New object-space positions (same count): refits when every kept
     /// triangle still has area and no dropped one gained some, else rebuilds.
-    pub fn set_positions(&mut self, positions: &[Vec3]) {
+    /// Returns the render-space boxes that hold the clusters with a moved
+    /// vertex, before and after (see [`TriangleClusters::changed`]), under
+    /// the current placement.
+    pub fn set_positions(&mut self, positions: &[Vec3]) -> Vec<Bounds> {
+        let changed = (self.clusters.changed(&self.positions, positions).iter())
+            .map(|bounds| bounds.transformed(&self.to_render))
+            .collect();
         self.positions.copy_from_slice(positions);
         let p = &self.positions;
         let vertices = |tri: [u32; 3]| tri.map(|i| p[i as usize]);
@@ -85,6 +96,7 @@ impl Instance {
             self.bvh = build(self.object, &self.triangles, &self.positions);
         }
         self.object_bounds = bounds_of(&self.bvh);
+        changed
     }
 
     fn object_ray(&self, ray: &Ray) -> Option<Ray> {

@@ -12,6 +12,7 @@
 //! surface must offset that end the same way (towards the start).
 
 pub mod bounds;
+pub mod clusters;
 mod instance;
 pub mod mesh_bvh;
 mod node_test;

@@ -213,8 +213,16 @@ impl World {
 
     /// New object-space positions for a deformed dynamic object (skinning,
     /// morph targets): its BVH is refitted, or rebuilt when triangles gain or
-    /// lose area; then the top level is rebuilt.
-    pub fn set_positions(&mut self, object: usize, positions: &[Vec3]) -> Result<(), WorldError> {
+    /// lose area; then the top level is rebuilt. Returns where the object
+    /// changed: the render-space boxes, at the old positions and at the new
+    /// ones, of each of its fixed clusters of triangles that has a moved
+    /// vertex ([`TriangleClusters`](super::clusters::TriangleClusters)),
+    /// under the object's current transform; nothing when no vertex moved.
+    pub fn set_positions(
+        &mut self,
+        object: usize,
+        positions: &[Vec3],
+    ) -> Result<Vec<Bounds>, WorldError> {
         let i = self.dynamic_index(object)?;
         let expected = self.instances[i].vertex_count();
         if positions.len() != expected {
@@ -224,9 +232,9 @@ impl World {
                 given: positions.len(),
             });
         }
-        self.instances[i].set_positions(positions);
+        let changed = self.instances[i].set_positions(positions);
         self.top = TopLevel::build(&self.instances);
-        Ok(())
+        Ok(changed)
     }
 
     /// Render-space bounds of everything in the world now.

@@ -1,17 +1,23 @@
 //! Invalidation between frames (DESIGN.md, "Invalidation rule"): a
 //! (node x, light i) bit can change only if the segment [x, L_i] meets a
-//! region where geometry changed — the old and the new world bounds of every
-//! moved or deformed object — or light i itself moved. Camera motion,
-//! material changes and light colour or intensity changes invalidate
-//! nothing. Moving objects are dynamic, so they only touch the dynamic layer;
-//! a moved light drops both layers of its bits.
+//! region where geometry changed, or light i itself moved. The regions are
+//! the old and the new world bounds of every rigidly moved object, and for
+//! a deformed one the boxes of its clusters of triangles that have a moved
+//! vertex, before and after (`accel::clusters`). Camera motion, material
+//! changes and light colour or intensity changes invalidate nothing.
+//! Moving objects are dynamic, so they only touch the dynamic layer; a
+//! moved light drops both layers of its bits.
 //!
 //! Testing every cached node against every region and light would cost more
-//! than a frame, so space is culled first against the cone that a region's
-//! bounding sphere casts from the light (a directional light casts a
-//! cylinder): groups of 8×8×8 bricks against every (light, region) pair,
-//! then each brick of a group against the pairs its group kept; only nodes
-//! of bricks inside a cone get the exact segment test.
+//! than a frame, so space is culled first, with the regions in a tree
+//! (`region_tree`) so that a few hundred small boxes cost a query little
+//! more than a few large ones: each group of 8×8×8 bricks keeps the lights
+//! for which the cone that some region's bounding sphere casts from the
+//! light (a cylinder for a directional light) reaches the group; each
+//! brick, for each of those lights that it holds a valid dynamic bit of,
+//! collects the regions that the shaft from the brick to the light may
+//! meet (for a directional light, whose cylinder may reach the brick); only
+//! those meet the exact segment test of the brick's nodes.
 //! Culling is conservative and the node test pads the regions by rounding
 //! error, so a bit that may have changed is always dropped: re-computing it
 //! gives the same value, which is what makes a reused frame equal a cold one.
@@ -20,9 +26,12 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
-use super::masks::{join, BRICK_EDGE, BRICK_NODES};
+use super::lattice::Lattice;
+use super::masks::{join, BrickValidity, BRICK_EDGE, BRICK_NODES};
+use super::region_tree::RegionTree;
 use super::LightMesh;
-use crate::accel::Ray;
+use crate::accel::shaft::Shaft;
+use crate::accel::{Bounds, Ray};
 use crate::render::light::{LightSource, RenderLight};
 
 /// Bricks along each edge of a group culled as one.
@@ -33,6 +42,15 @@ const GROUP_EDGE: i32 = 8;
 pub struct ChangedRegion {
     pub min: Vec3,
     pub max: Vec3,
+}
+
+impl From<Bounds> for ChangedRegion {
+    fn from(bounds: Bounds) -> ChangedRegion {
+        ChangedRegion {
+            min: bounds.min,
+            max: bounds.max,
+        }
+    }
 }
 
 impl ChangedRegion {
@@ -48,7 +66,7 @@ impl ChangedRegion {
         }
     }
 
-    fn centre(&self) -> Vec3 {
+    pub(super) fn centre(&self) -> Vec3 {
         0.5 * (self.min + self.max)
     }
 
@@ -205,52 +223,8 @@ impl LightMesh {
         if regions.is_empty() && moved_lights.is_empty() {
             return 0;
         }
-        let padded: Vec<ChangedRegion> = regions.iter().map(ChangedRegion::padded).collect();
-        let volumes: Vec<Vec<ShadowVolume>> = lights
-            .iter()
-            .map(|light| {
-                padded
-                    .iter()
-                    .map(|region| ShadowVolume::new(light, region))
-                    .collect()
-            })
-            .collect();
-        let lattice = self.lattice;
-        let words = lights.len().div_ceil(64).max(1);
-        let brick_radius = lattice.h * (BRICK_EDGE - 1) as f32 * 3f32.sqrt() * 0.5 * (1.0 + 1e-5);
-        let group_radius =
-            lattice.h * (GROUP_EDGE * BRICK_EDGE - 1) as f32 * 3f32.sqrt() * 0.5 * (1.0 + 1e-5);
-        let sphere_of = |first: IVec3, last: IVec3| {
-            0.5 * (lattice.node_position(first) + lattice.node_position(last))
-        };
-        // The (light, region) pairs whose volume may reach each group.
-        let mut groups: Vec<IVec3> = self
-            .masks
-            .brick_keys()
-            .map(|brick| brick.div_euclid(IVec3::splat(GROUP_EDGE)))
-            .collect();
-        groups.sort_unstable_by_key(|group| group.to_array());
-        groups.dedup();
-        let group_span = GROUP_EDGE * BRICK_EDGE;
-        let reaching: FxHashMap<IVec3, Vec<(usize, usize)>> = groups
-            .par_iter()
-            .map(|&group| {
-                let first = group * group_span;
-                let centre = sphere_of(first, first + IVec3::splat(group_span - 1));
-                let pairs = volumes
-                    .iter()
-                    .enumerate()
-                    .flat_map(|(light, of_light)| {
-                        of_light
-                            .iter()
-                            .enumerate()
-                            .filter(move |(_, volume)| volume.may_meet(centre, group_radius))
-                            .map(move |(region, _)| (light, region))
-                    })
-                    .collect();
-                (group, pairs)
-            })
-            .collect();
+        let culling = Culling::new(self.lattice, lights, regions);
+        let reaching = culling.lights_reaching_groups(self.masks.brick_keys());
         self.masks.invalidate(|brick, validity| {
             let mut cleared = 0;
             for &light in moved_lights {
@@ -258,53 +232,184 @@ impl LightMesh {
                     cleared += validity.clear_both(slot, light / 64, 1 << (light % 64));
                 }
             }
-            let pairs = &reaching[&brick.div_euclid(IVec3::splat(GROUP_EDGE))];
-            if pairs.is_empty() {
-                return cleared;
-            }
-            let centre = sphere_of(join(brick, 0), join(brick, BRICK_NODES - 1));
-            // The regions each light's volume brings near this brick, and
-            // per word the lights that have any: one pass over the slots
-            // then tests only their valid bits.
-            let mut near: Vec<(usize, &ChangedRegion)> = Vec::new();
-            let mut near_lights = vec![0u64; words];
-            for &(light, region) in pairs {
-                if volumes[light][region].may_meet(centre, brick_radius) {
-                    near.push((light, &padded[region]));
-                    near_lights[light / 64] |= 1 << (light % 64);
-                }
-            }
-            if near.is_empty() {
-                return cleared;
-            }
-            for slot in 0..BRICK_NODES {
-                if (0..words)
-                    .all(|word| validity.dynamic_valid(slot, word) & near_lights[word] == 0)
-                {
-                    continue;
-                }
-                let node = lattice.node_position(join(brick, slot));
-                for (word, &candidates) in near_lights.iter().enumerate() {
-                    let mut bits = validity.dynamic_valid(slot, word) & candidates;
-                    while bits != 0 {
-                        let bit = bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        let index = word * 64 + bit;
-                        let segment = SlabSegment::new(&lights[index].shadow_ray(node));
-                        // `near` follows `pairs`, sorted by light.
-                        let first = near.partition_point(|&(light, _)| light < index);
-                        let meets = near[first..]
-                            .iter()
-                            .take_while(|&&(light, _)| light == index)
-                            .any(|(_, region)| segment.meets(region));
-                        if meets {
-                            cleared += validity.clear_dynamic(slot, word, 1 << bit);
-                        }
-                    }
-                }
-            }
-            cleared
+            cleared + culling.clear_brick(brick, validity, &reaching[&group_of(brick)])
         })
+    }
+}
+
+/// The group of bricks `brick` is culled with.
+fn group_of(brick: IVec3) -> IVec3 {
+    brick.div_euclid(IVec3::splat(GROUP_EDGE))
+}
+
+/// One frame's changed regions, padded, with what culls space against
+/// them: a tree over the regions and, per light, the shadow volume of each
+/// of its nodes.
+struct Culling<'a> {
+    lattice: Lattice,
+    lights: &'a [RenderLight],
+    /// Bit words per node, one bit per light.
+    words: usize,
+    regions: Vec<ChangedRegion>,
+    tree: RegionTree,
+    /// The tree's node boxes, by node index.
+    node_bounds: Vec<ChangedRegion>,
+    /// Per light, by tree node.
+    volumes: Vec<Vec<ShadowVolume>>,
+}
+
+impl Culling<'_> {
+    fn new<'a>(
+        lattice: Lattice,
+        lights: &'a [RenderLight],
+        regions: &[ChangedRegion],
+    ) -> Culling<'a> {
+        let regions: Vec<ChangedRegion> = regions.iter().map(ChangedRegion::padded).collect();
+        let tree = RegionTree::new(&regions);
+        let node_bounds: Vec<ChangedRegion> = tree.node_bounds().copied().collect();
+        let volumes = lights
+            .iter()
+            .map(|light| {
+                (node_bounds.iter())
+                    .map(|bounds| ShadowVolume::new(light, bounds))
+                    .collect()
+            })
+            .collect();
+        Culling {
+            lattice,
+            lights,
+            words: lights.len().div_ceil(64).max(1),
+            regions,
+            tree,
+            node_bounds,
+            volumes,
+        }
+    }
+
+    /// Radius of the sphere around a cube of `nodes` nodes along each
+    /// edge, padded for rounding.
+    fn sphere_radius(&self, nodes: i32) -> f32 {
+        self.lattice.h * (nodes - 1) as f32 * 3f32.sqrt() * 0.5 * (1.0 + 1e-5)
+    }
+
+    /// Whether the shadow volume of some region from `light` may meet the
+    /// sphere.
+    fn reaches(&self, light: usize, centre: Vec3, radius: f32) -> bool {
+        let volumes = &self.volumes[light];
+        self.tree
+            .reaches(|node| volumes[node].may_meet(centre, radius))
+    }
+
+    /// For each group of bricks holding one of `bricks`, the lights (bit
+    /// words) for which the shadow volume of some region reaches the
+    /// group's sphere.
+    fn lights_reaching_groups(
+        &self,
+        bricks: impl Iterator<Item = IVec3>,
+    ) -> FxHashMap<IVec3, Vec<u64>> {
+        let mut groups: Vec<IVec3> = bricks.map(group_of).collect();
+        groups.sort_unstable_by_key(|group| group.to_array());
+        groups.dedup();
+        let span = GROUP_EDGE * BRICK_EDGE;
+        let radius = self.sphere_radius(span);
+        groups
+            .par_iter()
+            .map(|&group| {
+                let first = self.lattice.node_position(group * span);
+                let last = self
+                    .lattice
+                    .node_position(group * span + IVec3::splat(span - 1));
+                let centre = 0.5 * (first + last);
+                let mut lights = vec![0u64; self.words];
+                for light in 0..self.lights.len() {
+                    let reaches = self.reaches(light, centre, radius);
+                    lights[light / 64] |= u64::from(reaches) << (light % 64);
+                }
+                (group, lights)
+            })
+            .collect()
+    }
+
+    /// Drops the dynamic bits of `brick`'s nodes, for the lights in
+    /// `reaching` (bit words), whose segment meets a region; returns how
+    /// many. Only the lights of which the brick holds a valid dynamic bit
+    /// are culled further: each takes the regions near the brick from the
+    /// tree, and only those are tested.
+    fn clear_brick(&self, brick: IVec3, validity: &mut BrickValidity, reaching: &[u64]) -> u64 {
+        if reaching.iter().all(|&word| word == 0) {
+            return 0;
+        }
+        let first = self.lattice.node_position(join(brick, 0));
+        let last = self.lattice.node_position(join(brick, BRICK_NODES - 1));
+        let mut cleared = 0;
+        let mut near = Vec::new();
+        for (word, &reaching) in reaching.iter().enumerate() {
+            let valid =
+                (0..BRICK_NODES).fold(0, |any, slot| any | validity.dynamic_valid(slot, word));
+            let mut lights = reaching & valid;
+            while lights != 0 {
+                let light = word * 64 + lights.trailing_zeros() as usize;
+                lights &= lights - 1;
+                near.clear();
+                self.near_regions(light, first, last, &mut near);
+                if !near.is_empty() {
+                    cleared += self.clear_segments(brick, validity, light, &near);
+                }
+            }
+        }
+        cleared
+    }
+
+    /// Drops the dynamic bit of `light` of each node of `brick` whose
+    /// segment to the light meets one of the `near` regions; returns how
+    /// many.
+    fn clear_segments(
+        &self,
+        brick: IVec3,
+        validity: &mut BrickValidity,
+        light: usize,
+        near: &[usize],
+    ) -> u64 {
+        let (word, bit) = (light / 64, 1 << (light % 64));
+        let mut cleared = 0;
+        for slot in 0..BRICK_NODES {
+            if validity.dynamic_valid(slot, word) & bit == 0 {
+                continue;
+            }
+            let node = self.lattice.node_position(join(brick, slot));
+            let segment = SlabSegment::new(&self.lights[light].shadow_ray(node));
+            if near
+                .iter()
+                .any(|&region| segment.meets(&self.regions[region]))
+            {
+                cleared += validity.clear_dynamic(slot, word, bit);
+            }
+        }
+        cleared
+    }
+
+    /// Appends to `near` the regions that a segment from a point of the
+    /// box `first..=last` (a brick's nodes) to `light` may meet: for a
+    /// positional light those that may meet the shaft from the box to it
+    /// (which holds every such segment), for a directional one those whose
+    /// shadow cylinder may reach the box's sphere.
+    fn near_regions(&self, light: usize, first: Vec3, last: Vec3, near: &mut Vec<usize>) {
+        match self.lights[light].position() {
+            Some(position) => {
+                let shaft = Shaft::new(first, last, position);
+                let boxes = &self.node_bounds;
+                self.tree.reached(
+                    |node| shaft.may_meet_box(boxes[node].min, boxes[node].max),
+                    near,
+                );
+            }
+            None => {
+                let (centre, radius) = (0.5 * (first + last), self.sphere_radius(BRICK_EDGE));
+                let volumes = &self.volumes[light];
+                self.tree
+                    .reached(|node| volumes[node].may_meet(centre, radius), near);
+            }
+        }
     }
 }
 

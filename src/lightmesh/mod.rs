@@ -14,6 +14,7 @@ pub mod interpolate;
 pub mod invalidate;
 pub mod lattice;
 pub mod masks;
+mod region_tree;
 pub mod spacing;
 
 use serde::Serialize;

@@ -242,3 +242,48 @@ pub fn linear_translation(
         },
     }
 }
+
+/// A sheet standing in the plane x = `x` over z in [-half_width, half_width]
+/// and y in [0, height], in cells of `cell` metres (two triangles each),
+/// with one morph target that lowers the top edge of its z > 0 half, by
+/// `drop` metres at the far end (vertices sink in proportion to y and z),
+/// and leaves its z ≤ 0 half still. Normals face −X.
+pub fn half_morphing_sheet(x: f32, half_width: f32, height: f32, cell: f32, drop: f32) -> Mesh {
+    let (columns, rows) = (
+        (2.0 * half_width / cell).round() as u32,
+        (height / cell).round() as u32,
+    );
+    let mut mesh = Mesh::default();
+    let mut offsets = Vec::new();
+    for j in 0..=rows {
+        for i in 0..=columns {
+            let (y, z) = (
+                height * j as f32 / rows as f32,
+                -half_width + cell * i as f32,
+            );
+            mesh.positions.push(Vec3::new(x, y, z));
+            mesh.normals.push(Vec3::NEG_X);
+            let sink = if z > 0.0 {
+                drop * (y / height) * (z / half_width)
+            } else {
+                0.0
+            };
+            offsets.push(Vec3::new(0.0, -sink, 0.0));
+        }
+    }
+    let row = columns + 1;
+    for j in 0..rows {
+        for i in 0..columns {
+            let a = j * row + i;
+            mesh.triangles.push([a, a + 1, a + row + 1]);
+            mesh.triangles.push([a, a + row + 1, a + row]);
+            mesh.triangle_materials.extend([0, 0]);
+        }
+    }
+    mesh.morph_targets = vec![lmanim::scene::MorphTarget {
+        positions: offsets,
+        normals: Vec::new(),
+    }];
+    mesh.morph_weights = vec![0.0];
+    mesh
+}
