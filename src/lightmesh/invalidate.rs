@@ -225,13 +225,15 @@ impl LightMesh {
         }
         let culling = Culling::new(self.lattice, lights, regions);
         let reaching = culling.lights_reaching_groups(self.masks.brick_keys());
+        let mut moved = vec![0u64; culling.words];
+        for &light in moved_lights {
+            moved[light / 64] |= 1 << (light % 64);
+        }
         self.masks.invalidate(|brick, validity| {
-            let mut cleared = 0;
-            for &light in moved_lights {
-                for slot in 0..BRICK_NODES {
-                    cleared += validity.clear_both(slot, light / 64, 1 << (light % 64));
-                }
-            }
+            let cleared: u64 = (moved.iter().enumerate())
+                .filter(|(_, &lights)| lights != 0)
+                .map(|(word, &lights)| validity.clear_lights(word, lights))
+                .sum();
             cleared + culling.clear_brick(brick, validity, &reaching[&group_of(brick)])
         })
     }
@@ -333,8 +335,8 @@ impl Culling<'_> {
     /// Drops the dynamic bits of `brick`'s nodes, for the lights in
     /// `reaching` (bit words), whose segment meets a region; returns how
     /// many. Only the lights of which the brick holds a valid dynamic bit
-    /// are culled further: each takes the regions near the brick from the
-    /// tree, and only those are tested.
+    /// (as the brick keeps count) are culled further: each takes the
+    /// regions near the brick from the tree, and only those are tested.
     fn clear_brick(&self, brick: IVec3, validity: &mut BrickValidity, reaching: &[u64]) -> u64 {
         if reaching.iter().all(|&word| word == 0) {
             return 0;
@@ -344,9 +346,7 @@ impl Culling<'_> {
         let mut cleared = 0;
         let mut near = Vec::new();
         for (word, &reaching) in reaching.iter().enumerate() {
-            let valid =
-                (0..BRICK_NODES).fold(0, |any, slot| any | validity.dynamic_valid(slot, word));
-            let mut lights = reaching & valid;
+            let mut lights = reaching & validity.dynamic_lights(word);
             while lights != 0 {
                 let light = word * 64 + lights.trailing_zeros() as usize;
                 lights &= lights - 1;
@@ -370,22 +370,12 @@ impl Culling<'_> {
         light: usize,
         near: &[usize],
     ) -> u64 {
-        let (word, bit) = (light / 64, 1 << (light % 64));
-        let mut cleared = 0;
-        for slot in 0..BRICK_NODES {
-            if validity.dynamic_valid(slot, word) & bit == 0 {
-                continue;
-            }
+        validity.clear_dynamic_where(light / 64, (light % 64) as u32, |slot| {
             let node = self.lattice.node_position(join(brick, slot));
             let segment = SlabSegment::new(&self.lights[light].shadow_ray(node));
-            if near
-                .iter()
+            near.iter()
                 .any(|&region| segment.meets(&self.regions[region]))
-            {
-                cleared += validity.clear_dynamic(slot, word, bit);
-            }
-        }
-        cleared
+        })
     }
 
     /// Appends to `near` the regions that a segment from a point of the

@@ -26,9 +26,30 @@ pub const BRICK_NODES: usize = (BRICK_EDGE * BRICK_EDGE * BRICK_EDGE) as usize;
 pub struct MaskStore {
     /// Words of visibility (and as many of validity) bits per node.
     words: usize,
-    bricks: FxHashMap<IVec3, Box<[u64]>>,
+    bricks: FxHashMap<IVec3, Brick>,
     /// Nodes with at least one valid bit, kept as bits are set.
     nodes: usize,
+}
+
+/// One brick's bits, and which lights have a valid dynamic bit in it.
+#[derive(Clone, Debug)]
+struct Brick {
+    /// Per node slot, [`GROUPS`] groups of `words` words.
+    nodes: Box<[u64]>,
+    /// Per word, the lights of which some node holds a valid dynamic bit:
+    /// exactly those, kept as bits are set and cleared, so invalidation
+    /// passes over a light's bricks that hold nothing of it without
+    /// reading their 512 nodes.
+    dynamic_lights: Box<[u64]>,
+}
+
+impl Brick {
+    fn new(words: usize) -> Brick {
+        Brick {
+            nodes: vec![0; BRICK_NODES * GROUPS * words].into_boxed_slice(),
+            dynamic_lights: vec![0; words].into_boxed_slice(),
+        }
+    }
 }
 
 /// Groups of `words` words per node, in this order.
@@ -124,13 +145,13 @@ impl MaskStore {
     /// The node's mask, or None when no bit of it was ever computed.
     pub fn node(&self, node: IVec3) -> Option<NodeMask<'_>> {
         let (brick, slot) = split(node);
-        Some(self.slot_mask(self.bricks.get(&brick)?, slot))
+        Some(self.slot_mask(&self.bricks.get(&brick)?.nodes, slot))
     }
 
     /// A brick's bits (per slot, [`GROUPS`] groups of `words` words), or
     /// None when no node in it was ever computed.
     pub fn brick(&self, brick: IVec3) -> Option<&[u64]> {
-        self.bricks.get(&brick).map(|bits| &bits[..])
+        self.bricks.get(&brick).map(|stored| &stored.nodes[..])
     }
 
     /// The mask of `slot` within a brick's bits.
@@ -185,11 +206,11 @@ impl MaskStore {
 
     fn merge_slot(&mut self, brick: IVec3, slot: usize, update: &LayerUpdate, offset: usize) {
         let words = self.words;
-        let bits = self
+        let stored = self
             .bricks
             .entry(brick)
-            .or_insert_with(|| vec![0; BRICK_NODES * GROUPS * words].into_boxed_slice());
-        let node = &mut bits[slot * GROUPS * words..(slot + 1) * GROUPS * words];
+            .or_insert_with(|| Brick::new(words));
+        let node = &mut stored.nodes[slot * GROUPS * words..(slot + 1) * GROUPS * words];
         let was_empty = node[STATIC_VALID * words..(STATIC_VALID + 1) * words]
             .iter()
             .all(|&valid| valid == 0);
@@ -209,6 +230,7 @@ impl MaskStore {
             node[at(DYNAMIC_OCCLUDED)] =
                 (node[at(DYNAMIC_OCCLUDED)] & !computed) | (value & computed);
             node[at(DYNAMIC_VALID)] |= computed;
+            stored.dynamic_lights[word] |= computed;
             now_valid |= node[at(STATIC_VALID)] != 0;
         }
         if was_empty && now_valid {
@@ -227,7 +249,14 @@ impl MaskStore {
         let words = self.words;
         self.bricks
             .par_iter_mut()
-            .map(|(brick, bits)| clear(*brick, &mut BrickValidity { bits, words }))
+            .map(|(brick, stored)| {
+                let validity = &mut BrickValidity {
+                    bits: &mut stored.nodes,
+                    dynamic_lights: &mut stored.dynamic_lights,
+                    words,
+                };
+                clear(*brick, validity)
+            })
             .sum()
     }
 
@@ -246,7 +275,7 @@ impl MaskStore {
 
     /// Heap bytes one brick takes, for memory budgets.
     pub fn brick_bytes(lights: usize) -> usize {
-        BRICK_NODES * GROUPS * lights.div_ceil(64).max(1) * std::mem::size_of::<u64>()
+        (BRICK_NODES * GROUPS + 1) * lights.div_ceil(64).max(1) * std::mem::size_of::<u64>()
     }
 
     /// (node, light) pairs whose static bit is known: every pair the fill
@@ -256,7 +285,7 @@ impl MaskStore {
         let valid = STATIC_VALID * self.words..(STATIC_VALID + 1) * self.words;
         self.bricks
             .values()
-            .flat_map(|bits| bits.chunks(stride))
+            .flat_map(|stored| stored.nodes.chunks(stride))
             .map(|node| {
                 node[valid.clone()]
                     .iter()
@@ -273,7 +302,7 @@ impl MaskStore {
         let stride = GROUPS * self.words;
         self.bricks
             .par_iter()
-            .flat_map_iter(|(_, bits)| bits.chunks(stride))
+            .flat_map_iter(|(_, stored)| stored.nodes.chunks(stride))
             .map(|node| {
                 let mask = NodeMask {
                     bits: node,
@@ -299,9 +328,9 @@ impl MaskStore {
     ) -> impl Iterator<Item = (IVec3, BrickLightBits)> + '_ {
         let (words, word, bit) = (self.words, light / 64, light % 64);
         let stride = GROUPS * words;
-        self.bricks.iter().filter_map(move |(&brick, bits)| {
+        self.bricks.iter().filter_map(move |(&brick, stored)| {
             let mut out = BrickLightBits::default();
-            for (slot, node) in bits.chunks(stride).enumerate() {
+            for (slot, node) in stored.nodes.chunks(stride).enumerate() {
                 let valid = node[STATIC_VALID * words + word] >> bit & 1;
                 let visible = node[STATIC_VISIBLE * words + word] >> bit & 1 & valid;
                 out.valid[slot / 64] |= valid << (slot % 64);
@@ -319,9 +348,9 @@ impl MaskStore {
         let stored = self
             .bricks
             .entry(brick)
-            .or_insert_with(|| vec![0; BRICK_NODES * GROUPS * words].into_boxed_slice());
+            .or_insert_with(|| Brick::new(words));
         let mut imported = 0;
-        for (slot, node) in stored.chunks_mut(GROUPS * words).enumerate() {
+        for (slot, node) in stored.nodes.chunks_mut(GROUPS * words).enumerate() {
             if bits.valid[slot / 64] >> (slot % 64) & 1 == 0
                 || node[STATIC_VALID * words + word] & bit != 0
             {
@@ -360,31 +389,60 @@ pub struct BrickLightBits {
 /// Mutable access to one brick's validity bits, for invalidation.
 pub struct BrickValidity<'a> {
     bits: &'a mut [u64],
+    dynamic_lights: &'a mut [u64],
     words: usize,
 }
 
 impl BrickValidity<'_> {
-    /// Clears the dynamic-layer validity of `lights` (word `word`) at
-    /// `slot`; returns how many valid bits were cleared.
-    pub fn clear_dynamic(&mut self, slot: usize, word: usize, lights: u64) -> u64 {
-        self.clear(slot, DYNAMIC_VALID, word, lights)
+    /// Lights (word `word`) of which some node of the brick holds a valid
+    /// dynamic bit.
+    pub fn dynamic_lights(&self, word: usize) -> u64 {
+        self.dynamic_lights[word]
     }
 
-    /// Clears both layers' validity of `lights` at `slot` (a moved light).
-    pub fn clear_both(&mut self, slot: usize, word: usize, lights: u64) -> u64 {
-        self.clear(slot, STATIC_VALID, word, lights) + self.clear(slot, DYNAMIC_VALID, word, lights)
+    /// Clears the dynamic-layer validity of light `64·word + bit` at each
+    /// slot that holds it and `changed(slot)` takes; returns how many bits
+    /// were cleared.
+    pub fn clear_dynamic_where(
+        &mut self,
+        word: usize,
+        bit: u32,
+        mut changed: impl FnMut(usize) -> bool,
+    ) -> u64 {
+        let light = 1u64 << bit;
+        let mut cleared = 0;
+        let mut kept = 0;
+        for slot in 0..BRICK_NODES {
+            let at = (slot * GROUPS + DYNAMIC_VALID) * self.words + word;
+            if self.bits[at] & light == 0 {
+                continue;
+            }
+            if changed(slot) {
+                self.bits[at] &= !light;
+                cleared += 1;
+            } else {
+                kept += 1;
+            }
+        }
+        if kept == 0 {
+            self.dynamic_lights[word] &= !light;
+        }
+        cleared
     }
 
-    /// Lights (word `word`) at `slot` whose dynamic bit is valid.
-    pub fn dynamic_valid(&self, slot: usize, word: usize) -> u64 {
-        self.bits[(slot * GROUPS + DYNAMIC_VALID) * self.words + word]
-    }
-
-    fn clear(&mut self, slot: usize, group: usize, word: usize, lights: u64) -> u64 {
-        let bits = &mut self.bits[(slot * GROUPS + group) * self.words + word];
-        let cleared = *bits & lights;
-        *bits &= !lights;
-        cleared.count_ones() as u64
+    /// Clears both layers' validity of `lights` (word `word`) at every
+    /// slot (moved lights); returns how many valid bits were cleared.
+    pub fn clear_lights(&mut self, word: usize, lights: u64) -> u64 {
+        let mut cleared = 0;
+        for slot in 0..BRICK_NODES {
+            for group in [STATIC_VALID, DYNAMIC_VALID] {
+                let bits = &mut self.bits[(slot * GROUPS + group) * self.words + word];
+                cleared += (*bits & lights).count_ones() as u64;
+                *bits &= !lights;
+            }
+        }
+        self.dynamic_lights[word] &= !lights;
+        cleared
     }
 }
 
@@ -484,6 +542,62 @@ mod tests {
         // A neighbour in the same brick is untouched.
         assert_eq!(store.get(node + IVec3::X, 129), None);
         assert_eq!(store.nodes_cached(), 1);
+    }
+
+    /// The lights a brick says it holds dynamic bits of, after `clear`.
+    fn dynamic_lights_after(
+        store: &mut MaskStore,
+        clear: impl Fn(&mut BrickValidity) -> u64 + Send + Sync,
+    ) -> (u64, [u64; 2]) {
+        let seen = std::sync::Mutex::new([0; 2]);
+        let cleared = store.invalidate(|_, validity| {
+            let cleared = clear(validity);
+            *seen.lock().unwrap() = [0, 1].map(|word| validity.dynamic_lights(word));
+            cleared
+        });
+        (cleared, seen.into_inner().unwrap())
+    }
+
+    #[test]
+    fn a_brick_knows_exactly_which_lights_it_holds_dynamic_bits_of() {
+        let mut store = MaskStore::new(70);
+        let (a, b) = (IVec3::new(1, 2, 3), IVec3::new(4, 5, 6));
+        store.set(a, 3, true, Some(false));
+        store.set(b, 3, true, Some(true));
+        store.set(a, 65, true, Some(false));
+        store.set(b, 7, false, None);
+        let (slot_a, slot_b) = (split(a).1, split(b).1);
+        let (cleared, lights) = dynamic_lights_after(&mut store, |_| 0);
+        assert_eq!(
+            (cleared, lights),
+            (0, [1 << 3, 1 << 1]),
+            "light 7 is static only"
+        );
+
+        // Clearing one of light 3's two nodes keeps it; the other drops it.
+        let (cleared, lights) =
+            dynamic_lights_after(&mut store, |v| v.clear_dynamic_where(0, 3, |s| s == slot_a));
+        assert_eq!((cleared, lights), (1, [1 << 3, 1 << 1]));
+        assert_eq!(store.get(a, 3), None);
+        assert_eq!(store.get(b, 3), Some(false));
+        let (cleared, lights) = dynamic_lights_after(&mut store, |v| {
+            v.clear_dynamic_where(0, 3, |s| {
+                assert_eq!(s, slot_b, "only slots holding the bit are asked");
+                true
+            })
+        });
+        assert_eq!((cleared, lights), (1, [0, 1 << 1]));
+
+        // A moved light drops both layers everywhere.
+        store.set(b, 3, true, Some(false));
+        let (cleared, lights) = dynamic_lights_after(&mut store, |v| v.clear_lights(0, 1 << 3));
+        assert_eq!(
+            (cleared, lights),
+            (3, [0, 1 << 1]),
+            "both of b's bits and a's static one"
+        );
+        assert_eq!(store.get(b, 3), None);
+        assert_eq!(store.get(b, 7), Some(false), "other lights stay");
     }
 
     #[test]
