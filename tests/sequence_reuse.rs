@@ -1,8 +1,9 @@
 //! Frames rendered in a sequence, reusing the light mesh's masks, equal the
 //! same frames rendered cold, bit for bit — with a truck passing between a
 //! lamp and a facade more than 15 m from it, a moving light and a moving
-//! camera, or a sheet that a morph target bends on one side only. Camera-only animation recomputes no bit; a still sequence copies
-//! its frames. Animated light colours and intensities, material factors
+//! camera, or a sheet that a morph target bends on one side only.
+//! Camera-only animation recomputes no bit; a still sequence copies its
+//! frames. Animated light colours and intensities, material factors
 //! and fields of view (KHR_animation_pointer) re-render every frame but
 //! invalidate and recompute no bit.
 
