@@ -148,6 +148,14 @@ fn mesh(lights: usize) -> LightMesh {
     LightMesh::new(Lattice::new(H), 2.5, lights, 1 << 30)
 }
 
+/// A light mesh filled cold for `demand`, with what the fill did.
+fn filled(demand: &Demand, lights: &[RenderLight], world: &World) -> (LightMesh, LightMeshStats) {
+    let mut mesh = mesh(lights.len());
+    let mut stats = LightMeshStats::default();
+    mesh.fill(demand, lights, world, &mut stats).unwrap();
+    (mesh, stats)
+}
+
 /// Visibility of every demanded (node, light) pair.
 fn masks_of(mesh: &LightMesh, demand: &Demand, lights: usize) -> Vec<Option<bool>> {
     demand
@@ -156,6 +164,27 @@ fn masks_of(mesh: &LightMesh, demand: &Demand, lights: usize) -> Vec<Option<bool
         .flat_map(|brick| (0..BRICK_NODES).map(move |slot| join(brick.brick, slot)))
         .flat_map(|node| (0..lights).map(move |light| mesh.masks().get(node, light)))
         .collect()
+}
+
+/// Fills what invalidation dropped from `reused`, checks the masks equal a
+/// cold fill of the same world and lights, bit for bit, and returns them
+/// with what the refill did.
+fn refill_equals_cold(
+    reused: &mut LightMesh,
+    demand: &Demand,
+    lights: &[RenderLight],
+    world: &World,
+) -> (Vec<Option<bool>>, LightMeshStats) {
+    let mut refill = LightMeshStats::default();
+    reused.fill(demand, lights, world, &mut refill).unwrap();
+    let (cold, _) = filled(demand, lights, world);
+    let after = masks_of(reused, demand, lights.len());
+    assert_eq!(
+        after,
+        masks_of(&cold, demand, lights.len()),
+        "reused masks equal cold ones"
+    );
+    (after, refill)
 }
 
 fn region(bounds: lmanim::accel::Bounds) -> ChangedRegion {
@@ -179,9 +208,7 @@ fn a_truck_passing_far_from_the_facade_invalidates_exactly_its_shadow() {
     let parked = truck_at(-40.0);
     let passing = truck_at(11.0);
     let mut world = street.world(parked);
-    let mut reused = mesh(lights.len());
-    let mut stats = LightMeshStats::default();
-    reused.fill(&demand, &lights, &world, &mut stats).unwrap();
+    let (mut reused, _) = filled(&demand, &lights, &world);
     let before = masks_of(&reused, &demand, lights.len());
     assert!(
         before.iter().all(Option::is_some),
@@ -197,18 +224,7 @@ fn a_truck_passing_far_from_the_facade_invalidates_exactly_its_shadow() {
         "the truck stays more than 15 m from the facade"
     );
     let invalidated = reused.invalidate(&[region(old), region(new)], &[], &lights);
-    let mut refill = LightMeshStats::default();
-    reused.fill(&demand, &lights, &world, &mut refill).unwrap();
-
-    let mut cold = mesh(lights.len());
-    cold.fill(&demand, &lights, &world, &mut LightMeshStats::default())
-        .unwrap();
-    let after = masks_of(&reused, &demand, lights.len());
-    assert_eq!(
-        after,
-        masks_of(&cold, &demand, lights.len()),
-        "reused masks equal cold ones"
-    );
+    let (after, refill) = refill_equals_cold(&mut reused, &demand, &lights, &world);
 
     let changed = before.iter().zip(&after).filter(|(a, b)| a != b).count();
     assert!(
@@ -248,20 +264,12 @@ fn a_moved_light_drops_its_bits_and_refills_like_cold() {
     ];
     let lattice = Lattice::new(H);
     let demand = facade_demand(&lattice, lights.len());
-    let mut reused = mesh(lights.len());
-    reused
-        .fill(&demand, &lights, &world, &mut LightMeshStats::default())
-        .unwrap();
+    let (mut reused, _) = filled(&demand, &lights, &world);
 
     lights[0] = lamp(Vec3::new(0.0, 9.0, 4.0));
     let invalidated = reused.invalidate(&[], &[0], &lights);
     assert!(invalidated > 0);
-    let mut refill = LightMeshStats::default();
-    reused.fill(&demand, &lights, &world, &mut refill).unwrap();
-    let mut cold = mesh(lights.len());
-    cold.fill(&demand, &lights, &world, &mut LightMeshStats::default())
-        .unwrap();
-    assert_eq!(masks_of(&reused, &demand, 2), masks_of(&cold, &demand, 2));
+    let (_, refill) = refill_equals_cold(&mut reused, &demand, &lights, &world);
     assert!(refill.bits_reused > 0, "lamp 1's bits were kept");
 }
 
@@ -271,10 +279,7 @@ fn camera_and_colour_changes_invalidate_nothing() {
     let world = street.world(truck_at(11.0));
     let mut lights = vec![lamp(Vec3::new(0.0, 5.0, 0.0))];
     let demand = facade_demand(&Lattice::new(H), 1);
-    let mut reused = mesh(1);
-    reused
-        .fill(&demand, &lights, &world, &mut LightMeshStats::default())
-        .unwrap();
+    let (mut reused, _) = filled(&demand, &lights, &world);
     lights[0].power = Vec3::new(5.0, 1.0, 0.5);
     assert_eq!(reused.invalidate(&[], &[], &lights), 0);
     let mut refill = LightMeshStats::default();
@@ -314,9 +319,7 @@ fn shaft_settled_bits_equal_single_segments() {
     });
     demand.bricks.sort_by_key(|b| b.brick.to_array());
     demand.bricks.dedup_by_key(|b| b.brick);
-    let mut filled = mesh(lights.len());
-    let mut stats = LightMeshStats::default();
-    filled.fill(&demand, &lights, &world, &mut stats).unwrap();
+    let (shafted, stats) = filled(&demand, &lights, &world);
     let mut blocked = 0;
     for brick in &demand.bricks {
         for slot in 0..BRICK_NODES {
@@ -326,7 +329,7 @@ fn shaft_settled_bits_equal_single_segments() {
                 let expected = !world.occluded(&light.shadow_ray(x));
                 blocked += !expected as u32;
                 assert_eq!(
-                    filled.masks().get(node, index),
+                    shafted.masks().get(node, index),
                     Some(expected),
                     "node {node}, light {index}"
                 );
@@ -379,10 +382,7 @@ fn a_half_bent_sheet_drops_only_the_bits_its_moving_half_can_change() {
     let lights = vec![lamp(Vec3::new(0.0, 5.0, 0.0))];
     let lattice = Lattice::new(H);
     let demand = facade_demand(&lattice, lights.len());
-    let mut reused = mesh(lights.len());
-    reused
-        .fill(&demand, &lights, &world, &mut LightMeshStats::default())
-        .unwrap();
+    let (mut reused, _) = filled(&demand, &lights, &world);
     let before = masks_of(&reused, &demand, lights.len());
 
     let sheet_before = world.object_bounds(2).unwrap();
@@ -450,18 +450,8 @@ fn a_half_bent_sheet_drops_only_the_bits_its_moving_half_can_change() {
     }
     assert!(kept > 20, "{kept} segments cross the still half alone");
 
-    let mut refill = LightMeshStats::default();
-    reused.fill(&demand, &lights, &world, &mut refill).unwrap();
+    let (after, refill) = refill_equals_cold(&mut reused, &demand, &lights, &world);
     assert_eq!(refill.bits_computed, dropped);
-    let mut cold = mesh(lights.len());
-    cold.fill(&demand, &lights, &world, &mut LightMeshStats::default())
-        .unwrap();
-    let after = masks_of(&reused, &demand, lights.len());
-    assert_eq!(
-        after,
-        masks_of(&cold, &demand, lights.len()),
-        "reused masks equal cold ones"
-    );
     let uncovered = before.iter().zip(&after).filter(|(a, b)| a != b).count();
     assert!(uncovered > 10, "the sinking edge uncovers {uncovered} bits");
 }

@@ -135,18 +135,30 @@ fn rendered_cold(scene: &SceneDesc, settings: &Settings, time: f64) -> Image {
         .unwrap()
 }
 
+/// For LMM1 and LMM: every time rendered by one sequence, checked equal
+/// to the same time rendered cold, bit for bit.
+fn sequences_equal_cold(scene: &SceneDesc) -> Vec<Vec<(Image, FrameStats)>> {
+    [Method::Lmm1, Method::Lmm]
+        .into_iter()
+        .map(|method| {
+            let settings = settings_for(method);
+            let frames = rendered_in_sequence(scene, &settings);
+            for (&time, (image, _)) in TIMES.iter().zip(&frames) {
+                assert_eq!(
+                    *image,
+                    rendered_cold(scene, &settings, time),
+                    "{method} at t = {time}"
+                );
+            }
+            frames
+        })
+        .collect()
+}
+
 #[test]
 fn frames_with_reused_masks_equal_frames_rendered_cold() {
-    let scene = street(true, true, true);
-    for method in [Method::Lmm1, Method::Lmm] {
-        let settings = settings_for(method);
-        let frames = rendered_in_sequence(&scene, &settings);
-        for (&time, (image, stats)) in TIMES.iter().zip(&frames) {
-            assert_eq!(
-                *image,
-                rendered_cold(&scene, &settings, time),
-                "{method} at t = {time}"
-            );
+    for frames in sequences_equal_cold(&street(true, true, true)) {
+        for (&time, (_, stats)) in TIMES.iter().zip(&frames) {
             if time > 0.0 {
                 assert!(stats.objects_moved == 1 && stats.lights_moved == 1 && stats.camera_moved);
                 assert!(
@@ -342,15 +354,8 @@ fn a_mesh_deforming_in_part_renders_every_frame_like_cold() {
             &[0.0, 0.5, 1.0, 0.25],
         )],
     });
-    for method in [Method::Lmm1, Method::Lmm] {
-        let settings = settings_for(method);
-        let frames = rendered_in_sequence(&scene, &settings);
-        for (&time, (image, stats)) in TIMES.iter().zip(&frames) {
-            assert_eq!(
-                *image,
-                rendered_cold(&scene, &settings, time),
-                "{method} at t = {time}"
-            );
+    for frames in sequences_equal_cold(&scene) {
+        for (&time, (_, stats)) in TIMES.iter().zip(&frames) {
             if time > 0.0 {
                 assert_eq!((stats.objects_moved, stats.camera_moved), (1, false));
                 assert!(
