@@ -11,7 +11,8 @@
 //!
 //! `cargo bench --bench lmm` prints Markdown tables (BENCHMARKS.md keeps
 //! them). `LMANIM_BENCH_QUICK=1` runs 480p only; `LMANIM_BENCH_LAMPS=64`
-//! and `LMANIM_BENCH_HEIGHT=1080` run one lamp count and one size (and skips the kI table), for profiling one case.
+//! and `LMANIM_BENCH_HEIGHT=1080` run one lamp count and one size (and
+//! skip the kI table), for profiling one case.
 
 use std::path::Path;
 use std::time::Instant;

@@ -6,6 +6,7 @@ pub mod accel;
 pub mod anim;
 pub mod authoring;
 pub mod backend;
+pub mod bits;
 pub mod import;
 pub mod lightmesh;
 pub mod output;

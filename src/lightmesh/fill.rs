@@ -27,6 +27,7 @@ use glam::Vec3;
 
 use crate::accel::shaft::Shaft;
 use crate::accel::{StaticTriangle, World};
+use crate::bits::set_bits;
 use crate::render::light::RenderLight;
 
 /// Bits computed for one brick, laid out like the demand's table.
@@ -83,14 +84,11 @@ impl LayerTest<'_> {
     /// missing bits whose segment is blocked.
     fn settle(&self, positions: &[Vec3], missing: &[u64], work: &mut FillWork) -> Vec<u64> {
         let mut blocked = vec![0; missing.len()];
-        let mut lights = missing.iter().fold(0, |all, bits| all | bits);
-        while lights != 0 {
-            let bit = lights.trailing_zeros();
-            lights &= lights - 1;
+        for bit in set_bits(missing.iter().fold(0, |all, bits| all | bits)) {
             let members: Vec<usize> = (0..missing.len())
                 .filter(|&i| missing[i] >> bit & 1 == 1)
                 .collect();
-            let light = &self.lights[self.word * 64 + bit as usize];
+            let light = &self.lights[self.word * 64 + bit];
             self.settle_group(light, 1 << bit, positions, &members, &mut blocked, work);
         }
         blocked

@@ -13,7 +13,8 @@ use super::masks::BrickCache;
 use super::LightMesh;
 use crate::accel::offset::offset_ray_origin;
 use crate::accel::{Ray, World};
-use crate::render::omega::{set_lanes, LightLanes, PointLanes, LANES};
+use crate::bits::set_bits;
+use crate::render::omega::{LightLanes, PointLanes, LANES};
 use crate::render::surface::ShadingPoint;
 use crate::render::whitted;
 
@@ -156,7 +157,7 @@ impl LightMesh {
                     continue;
                 }
                 let omega = lights.omega(&at, word * 64 / LANES + block_in_word);
-                for lane in set_lanes(lit_lanes & omega.reaching) {
+                for lane in set_bits((lit_lanes & omega.reaching).into()) {
                     let bit = first + lane;
                     if all[word] >> bit & 1 == 1 {
                         radiance += omega.get(lane);

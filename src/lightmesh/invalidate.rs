@@ -32,6 +32,7 @@ use super::region_tree::RegionTree;
 use super::LightMesh;
 use crate::accel::shaft::Shaft;
 use crate::accel::{Bounds, Ray};
+use crate::bits::set_bits;
 use crate::render::light::{LightSource, RenderLight};
 
 /// Bricks along each edge of a group culled as one.
@@ -346,10 +347,8 @@ impl Culling<'_> {
         let mut cleared = 0;
         let mut near = Vec::new();
         for (word, &reaching) in reaching.iter().enumerate() {
-            let mut lights = reaching & validity.dynamic_lights(word);
-            while lights != 0 {
-                let light = word * 64 + lights.trailing_zeros() as usize;
-                lights &= lights - 1;
+            for bit in set_bits(reaching & validity.dynamic_lights(word)) {
+                let light = word * 64 + bit;
                 near.clear();
                 self.near_regions(light, first, last, &mut near);
                 if !near.is_empty() {

@@ -6,6 +6,8 @@
 use glam::{IVec3, Vec3};
 use wide::f32x8;
 
+use crate::bits::set_bits;
+
 /// Where the lattice origin sits inside a cell, as a fraction of `h` per
 /// axis. Scenes are modelled on round coordinates (floors at y = 0, walls on
 /// whole metres); an irrational-looking offset keeps nodes off those planes,
@@ -118,10 +120,8 @@ impl Lattice {
                 for (block, &(dx2, nx)) in x_lanes[..x_blocks].iter().enumerate() {
                     let inside = (dx2 + dy2 + dz2).simd_le(radius_lanes)
                         & (nx + ny + nz).simd_gt(on_plane_lanes);
-                    let mut lanes = inside.to_bitmask();
-                    while lanes != 0 {
-                        let ix = block as i32 * 8 + lanes.trailing_zeros() as i32;
-                        lanes &= lanes - 1;
+                    for lane in set_bits(inside.to_bitmask().into()) {
+                        let ix = (block * 8 + lane) as i32;
                         out.push(low + IVec3::new(ix, jy as i32, kz as i32));
                     }
                 }

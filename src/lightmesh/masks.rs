@@ -400,6 +400,11 @@ impl BrickValidity<'_> {
         self.dynamic_lights[word]
     }
 
+    /// Where word `word` of `group` of the node at `slot` is.
+    fn index(&self, slot: usize, group: usize, word: usize) -> usize {
+        (slot * GROUPS + group) * self.words + word
+    }
+
     /// Clears the dynamic-layer validity of light `64·word + bit` at each
     /// slot that holds it and `changed(slot)` takes; returns how many bits
     /// were cleared.
@@ -413,7 +418,7 @@ impl BrickValidity<'_> {
         let mut cleared = 0;
         let mut kept = 0;
         for slot in 0..BRICK_NODES {
-            let at = (slot * GROUPS + DYNAMIC_VALID) * self.words + word;
+            let at = self.index(slot, DYNAMIC_VALID, word);
             if self.bits[at] & light == 0 {
                 continue;
             }
@@ -436,7 +441,8 @@ impl BrickValidity<'_> {
         let mut cleared = 0;
         for slot in 0..BRICK_NODES {
             for group in [STATIC_VALID, DYNAMIC_VALID] {
-                let bits = &mut self.bits[(slot * GROUPS + group) * self.words + word];
+                let at = self.index(slot, group, word);
+                let bits = &mut self.bits[at];
                 cleared += (*bits & lights).count_ones() as u64;
                 *bits &= !lights;
             }

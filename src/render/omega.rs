@@ -247,17 +247,6 @@ impl OmegaBlock {
     }
 }
 
-/// The lanes whose bit is set in `mask`, in order.
-pub fn set_lanes(mut mask: u8) -> impl Iterator<Item = usize> {
-    std::iter::from_fn(move || {
-        (mask != 0).then(|| {
-            let lane = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            lane
-        })
-    })
-}
-
 /// A lane with every bit set (true) or none (false), as comparisons make.
 fn all_bits(flag: bool) -> f32 {
     f32::from_bits(if flag { u32::MAX } else { 0 })

@@ -5,9 +5,10 @@
 
 use glam::Vec3;
 
-use super::omega::{set_lanes, LightLanes, PointLanes, LANES};
+use super::omega::{LightLanes, PointLanes, LANES};
 use super::surface::ShadingPoint;
 use crate::accel::World;
+use crate::bits::set_bits;
 
 /// Direct light at `point` by formula (1); also returns how many shadow
 /// rays it traced (none for lights that cannot reach the point anyway).
@@ -18,7 +19,7 @@ pub fn direct_light(point: &ShadingPoint, lights: &LightLanes, world: &World) ->
     let at = PointLanes::new(point);
     for block in 0..lights.blocks() {
         let omega = lights.omega(&at, block);
-        for lane in set_lanes(omega.reaching) {
+        for lane in set_bits(omega.reaching.into()) {
             shadow_rays += 1;
             let light = &lights.lights()[block * LANES + lane];
             if !world.occluded(&point.shadow_ray(light)) {
