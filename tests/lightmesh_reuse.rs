@@ -187,13 +187,6 @@ fn refill_equals_cold(
     (after, refill)
 }
 
-fn region(bounds: lmanim::accel::Bounds) -> ChangedRegion {
-    ChangedRegion {
-        min: bounds.min,
-        max: bounds.max,
-    }
-}
-
 #[test]
 fn a_truck_passing_far_from_the_facade_invalidates_exactly_its_shadow() {
     let street = Street::new();
@@ -223,7 +216,11 @@ fn a_truck_passing_far_from_the_facade_invalidates_exactly_its_shadow() {
         30.0 - new.max.x > 15.0,
         "the truck stays more than 15 m from the facade"
     );
-    let invalidated = reused.invalidate(&[region(old), region(new)], &[], &lights);
+    let invalidated = reused.invalidate(
+        &[ChangedRegion::from(old), ChangedRegion::from(new)],
+        &[],
+        &lights,
+    );
     let (after, refill) = refill_equals_cold(&mut reused, &demand, &lights, &world);
 
     let changed = before.iter().zip(&after).filter(|(a, b)| a != b).count();
@@ -352,7 +349,7 @@ fn shaft_settled_bits_equal_single_segments() {
 
 /// Bounds of the sheet's vertices on one side of z = 0.
 fn half_bounds(positions: &[Vec3], moving: bool) -> ChangedRegion {
-    region(Bounds::from_points(
+    ChangedRegion::from(Bounds::from_points(
         positions.iter().copied().filter(|p| (p.z > 0.0) == moving),
     ))
 }
@@ -408,8 +405,8 @@ fn a_half_bent_sheet_drops_only_the_bits_its_moving_half_can_change() {
     }
 
     let sheet_box = [
-        region(sheet_before),
-        region(world.object_bounds(2).unwrap()),
+        ChangedRegion::from(sheet_before),
+        ChangedRegion::from(world.object_bounds(2).unwrap()),
     ];
     let mut whole = reused.clone();
     let dropped_by_box = whole.invalidate(&sheet_box, &[], &lights);
