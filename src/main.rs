@@ -19,7 +19,7 @@ use lmanim::import;
 use lmanim::output::{self, ExrPrecision, FramePattern};
 use lmanim::schedule::{FrameSet, Timeline};
 use lmanim::sequence::{self, Job};
-use lmanim::settings::{Method, Settings};
+use lmanim::settings::{BackendKind, Method, Settings};
 use lmanim::stats::RunStats;
 
 /// Render a glTF scene's animation to an EXR image sequence, with soft
@@ -81,6 +81,9 @@ struct RenderArgs {
     /// Rendering method.
     #[arg(long, value_enum)]
     method: Option<Method>,
+    /// Which hardware renders: `cpu` (default) or `gpu` (wgpu compute).
+    #[arg(long, value_enum)]
+    backend: Option<BackendKind>,
     /// Image width in pixels.
     #[arg(long)]
     width: Option<u32>,
@@ -284,6 +287,7 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     let flags = cli;
     settings.fps = flags.fps.unwrap_or(settings.fps);
     settings.method = flags.method.unwrap_or(settings.method);
+    settings.backend = flags.backend.unwrap_or(settings.backend);
     settings.width = flags.width.unwrap_or(settings.width);
     settings.height = flags.height.unwrap_or(settings.height);
     settings.spp = flags.spp.unwrap_or(settings.spp);

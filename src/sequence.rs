@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use crate::accel::{World, WorldObject};
 use crate::anim::pose::ClipSelection;
-use crate::backend::cpu::{BackendError, CpuBackend, Shading};
+use crate::backend::{Backend, BackendError, RenderError, Shading};
 use crate::import::{self, ImportError};
 use crate::lightmesh::cache::{static_geometry_hash, LightKey, StaticMaskCache};
 use crate::lightmesh::interpolate::Variant;
@@ -320,7 +320,7 @@ impl Sequence {
     /// Renders one frame into an image, filling `stats`.
     pub fn render(
         &mut self,
-        backend: &CpuBackend,
+        backend: &mut Backend,
         placed: &FrameScene,
         settings: &Settings,
         stats: &mut FrameStats,
@@ -355,9 +355,12 @@ impl Sequence {
         };
         let image = backend
             .render(&job, &mut shading, stats)
-            .map_err(|source| RunError::LightMesh {
-                file: self.scene_file.clone(),
-                source,
+            .map_err(|error| match error {
+                RenderError::LightMesh(source) => RunError::LightMesh {
+                    file: self.scene_file.clone(),
+                    source,
+                },
+                RenderError::Gpu(error) => RunError::Backend(error.into()),
             })?;
         if let Some(mesh_stats) = &mut stats.lightmesh {
             mesh_stats.bits_loaded = std::mem::take(&mut self.bits_loaded);
@@ -428,7 +431,10 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
             job.pattern.path_for(0).display().to_string(),
         ));
     }
-    let backend = CpuBackend::new(settings.threads)?;
+    let mut backend = Backend::new(settings.backend, settings.threads)?;
+    if let Some(adapter) = backend.adapter() {
+        log::info!("GPU adapter: {adapter}");
+    }
     let mut sequence = Sequence::load(job.scene_path)?;
     sequence.set_cache_dir(settings.cache_dir.as_ref().map(PathBuf::from));
     if let Some(clip) = &settings.clip {
@@ -452,7 +458,7 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
             ..FrameStats::default()
         };
         let placed = sequence.advance(timeline.time_of(frame), settings, &mut stats)?;
-        let image = sequence.render(&backend, &placed, settings, &mut stats)?;
+        let image = sequence.render(&mut backend, &placed, settings, &mut stats)?;
 
         let write_started = Instant::now();
         let path = job.pattern.path_for(frame);

@@ -30,6 +30,8 @@ pub struct Settings {
     /// Frames per second of the timeline.
     pub fps: f64,
     pub method: Method,
+    /// Which hardware renders the frames.
+    pub backend: BackendKind,
     /// Samples per pixel (camera rays, jittered within the pixel).
     pub spp: u32,
     /// Whitted recursion depth for mirrors and refraction.
@@ -61,6 +63,7 @@ impl Default for Settings {
             height: 360,
             fps: 24.0,
             method: Method::Whitted,
+            backend: BackendKind::Cpu,
             spp: 1,
             max_depth: 5,
             camera: None,
@@ -102,6 +105,20 @@ impl std::fmt::Display for Method {
             Method::Area => "area",
         })
     }
+}
+
+/// Which backend runs a frame's stages. The CPU is the default, so a
+/// render works on any machine.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum BackendKind {
+    /// rayon threads over the frame's stages.
+    #[default]
+    Cpu,
+    /// wgpu compute passes for the frame's ray queries.
+    Gpu,
 }
 
 /// Lamp radii, which set the size of soft shadows. A light's own
@@ -210,6 +227,12 @@ impl Settings {
             return Err(format!(
                 "max_depth is {}; it must be at most {MAX_DEPTH}",
                 self.max_depth
+            ));
+        }
+        if self.backend == BackendKind::Gpu && matches!(self.method, Method::Lmm | Method::Lmm1) {
+            return Err(format!(
+                "method {} runs on backend cpu only: backend gpu renders whitted and area",
+                self.method
             ));
         }
         if self.threads == Some(0) {

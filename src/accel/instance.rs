@@ -8,6 +8,7 @@ use glam::{Affine3A, Mat3, Vec3};
 
 use super::bounds::Bounds;
 use super::clusters::TriangleClusters;
+use super::flat::PlacedMesh;
 use super::mesh_bvh::{BuildTriangle, Layout, MeshBvh, MeshHit, TriangleRef};
 use super::Ray;
 use super::BUILD_PARAMS;
@@ -99,6 +100,22 @@ impl Instance {
         changed
     }
 
+    /// The instance in flat form: its BVH and its map into object space.
+    pub fn placed_mesh(&self) -> PlacedMesh<'_> {
+        PlacedMesh {
+            bvh: &self.bvh,
+            to_object: self.to_object,
+        }
+    }
+
+    /// The hit on the triangle in `slot` of this instance's BVH, with its
+    /// normal in render space, as [`Instance::closest_hit`] reports it.
+    pub fn hit_at(&self, slot: u32, t: f32, barycentric: glam::Vec2) -> Option<MeshHit> {
+        let mut hit = self.bvh.hit_at(slot, t, barycentric)?;
+        hit.normal = self.normal_in_render(hit.normal);
+        Some(hit)
+    }
+
     fn object_ray(&self, ray: &Ray) -> Option<Ray> {
         let m = self.to_object?;
         // The direction is mapped, not normalised, so `t` means the same
@@ -120,9 +137,15 @@ impl Instance {
         self.bvh.closest_hit(&local, best);
         if *best != before {
             if let Some(hit) = best.as_mut() {
-                hit.normal = (self.normal_to_render * hit.normal).normalize();
+                hit.normal = self.normal_in_render(hit.normal);
             }
         }
+    }
+
+    /// An object-space triangle normal `(b - a) × (c - a)`, unit, in
+    /// render space.
+    fn normal_in_render(&self, normal: Vec3) -> Vec3 {
+        (self.normal_to_render * normal).normalize()
     }
 
     pub fn occluded(&self, ray: &Ray) -> bool {

@@ -157,6 +157,40 @@ impl MeshBvh {
             .map(|(v, s)| (v.map(Vec3::from_array), *s))
     }
 
+    /// Vertices and sources in slot order: what the flat form uploads.
+    pub fn slots(&self) -> (&[[[f32; 3]; 3]], &[TriangleRef]) {
+        (&self.vertices, &self.sources)
+    }
+
+    /// The wide tree, for a mesh built with [`Layout::Wide`].
+    pub(super) fn wide(&self) -> Option<&WideBvh> {
+        match &self.tree {
+            Tree::Wide(tree) => Some(tree),
+            Tree::Binary(_) => None,
+        }
+    }
+
+    /// The binary tree, for a mesh built with [`Layout::Binary`].
+    pub(super) fn binary(&self) -> Option<&Bvh2> {
+        match &self.tree {
+            Tree::Binary(tree) => Some(tree),
+            Tree::Wide(_) => None,
+        }
+    }
+
+    /// The hit on the triangle in `slot` at `t` with `barycentric`, as
+    /// [`MeshBvh::closest_hit`] would report it: for hits found elsewhere
+    /// (a GPU) on this mesh's slots. None for a slot not in the mesh.
+    pub fn hit_at(&self, slot: u32, t: f32, barycentric: Vec2) -> Option<MeshHit> {
+        let vertices = self.vertices.get(slot as usize)?;
+        Some(MeshHit {
+            t,
+            source: self.sources[slot as usize],
+            barycentric,
+            normal: normal(vertices),
+        })
+    }
+
     /// Lowers `best` to the closest hit of `ray` on this mesh, if any is
     /// closer (ties by [`TriangleRef`]). `ray` is in this BVH's space;
     /// `best.t` must be comparable, i.e. measured along the same parameter.

@@ -13,9 +13,10 @@
 
 pub mod bounds;
 pub mod clusters;
+pub mod flat;
 mod instance;
 pub mod mesh_bvh;
-mod node_test;
+pub(crate) mod node_test;
 pub mod offset;
 pub mod ray;
 pub mod shaft;
@@ -27,7 +28,7 @@ pub mod world;
 pub use bounds::Bounds;
 pub use offset::offset_ray_origin;
 pub use ray::Ray;
-pub use world::{Hit, StaticTriangle, World, WorldError, WorldObject};
+pub use world::{Hit, MeshId, StaticTriangle, World, WorldError, WorldObject};
 
 use mesh_bvh::Layout;
 use obvhs::BvhBuildParams;

@@ -17,7 +17,7 @@ use super::wide::WideNode;
 pub const BINARY_SCALE: f32 = 1.0 + 2.0 * gamma(3);
 /// Stand-in for `1 / 0` and the largest inverse used: keeps every slab value
 /// finite (so no `0 * inf = NaN`) while far exceeding any real `t`.
-const INV_LIMIT: f32 = 18_446_744_073_709_551_616.0; // 2^64
+pub const INV_LIMIT: f32 = 18_446_744_073_709_551_616.0; // 2^64
 
 const fn gamma(n: u32) -> f32 {
     let u = f32::EPSILON * 0.5;

@@ -5,12 +5,14 @@
 //! visibility can be asked separately, because the light mesh keeps them in
 //! separate layers (static bits are cached; dynamic ones are re-tested).
 
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 
 use glam::{Affine3A, Vec2, Vec3};
 use obvhs::{aabb::Aabb, bvh2::builder::build_bvh2, bvh2::Bvh2, BvhBuildParams};
 
 use super::bounds::Bounds;
+use super::flat::{FlatDynamic, FlatStatic};
 use super::instance::Instance;
 use super::mesh_bvh::{BuildTriangle, MeshBvh, MeshHit, TriangleRef};
 use super::node_test::TraversalRay;
@@ -41,6 +43,18 @@ pub struct Hit {
     /// the side to offset new origins into is `±` this (see
     /// [`offset_ray_origin`](super::offset_ray_origin)).
     pub geometric_normal: Vec3,
+}
+
+impl From<MeshHit> for Hit {
+    fn from(hit: MeshHit) -> Hit {
+        Hit {
+            t: hit.t,
+            object: hit.source.object,
+            triangle: hit.source.triangle,
+            barycentric: hit.barycentric,
+            geometric_normal: hit.normal,
+        }
+    }
 }
 
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
@@ -75,6 +89,20 @@ pub struct World {
     placements: Vec<Placement>,
     instances: Vec<Instance>,
     top: TopLevel,
+    /// Tells this world from every other built in the process, so a copy
+    /// of it elsewhere (on a GPU) knows whether it still holds this one.
+    id: u64,
+    /// Counts the moves and deformations of dynamic objects.
+    dynamic_revision: u64,
+}
+
+/// Which mesh of the world a flat hit lies on: what a GPU's closest-hit
+/// record names beside the triangle's slot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshId {
+    Static,
+    /// The dynamic object at this index of [`FlatDynamic::instances`].
+    Instance(u32),
 }
 
 impl World {
@@ -112,13 +140,59 @@ impl World {
         let static_bvh = MeshBvh::build(&static_triangles, STATIC_LAYOUT, BUILD_PARAMS);
         let static_bounds = Bounds::from_points(static_bvh.triangles().flat_map(|(v, _)| v));
         let top = TopLevel::build(&instances);
+        static NEXT_ID: AtomicU64 = AtomicU64::new(0);
         World {
             static_bvh,
             static_bounds,
             placements,
             instances,
             top,
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
+            dynamic_revision: 0,
         }
+    }
+
+    /// Tells this world from every other built in this process.
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
+    /// Changes whenever a dynamic object moves or deforms: a copy of
+    /// [`World::flat_dynamic`] taken at an earlier revision is stale.
+    pub fn dynamic_revision(&self) -> u64 {
+        self.dynamic_revision
+    }
+
+    /// The static structure in flat form (it never changes).
+    pub fn flat_static(&self) -> FlatStatic {
+        FlatStatic::of(&self.static_bvh)
+    }
+
+    /// The dynamic objects, their placements and the top level over them,
+    /// in flat form, as they stand now.
+    pub fn flat_dynamic(&self) -> FlatDynamic {
+        let mut flat = FlatDynamic::default();
+        for instance in &self.instances {
+            flat.push_instance(instance.placed_mesh());
+        }
+        let members = self.top.bvh.primitive_indices.iter();
+        flat.push_top_level(
+            &self.top.bvh,
+            members.map(|&slot| self.top.members[slot as usize] as u32),
+        );
+        flat
+    }
+
+    /// The hit a flat traversal found on `slot` of `mesh` at `t` with
+    /// `barycentric`, completed as [`World::closest_hit`] completes its
+    /// own (source, render-space normal). None for a slot the world does
+    /// not have.
+    pub fn hit_at(&self, mesh: MeshId, slot: u32, t: f32, barycentric: Vec2) -> Option<Hit> {
+        let hit = match mesh {
+            MeshId::Static => self.static_bvh.hit_at(slot, t, barycentric),
+            MeshId::Instance(i) => self.instances.get(i as usize)?.hit_at(slot, t, barycentric),
+        }?;
+        Some(Hit::from(hit))
     }
 
     /// The closest hit in `(0, t_max)`; of hits at exactly equal `t`, the one
@@ -133,13 +207,7 @@ impl World {
                 *t_cull = best.map_or(*t_cull, |b| b.t);
                 true
             });
-        best.map(|h: MeshHit| Hit {
-            t: h.t,
-            object: h.source.object,
-            triangle: h.source.triangle,
-            barycentric: h.barycentric,
-            geometric_normal: h.normal,
-        })
+        best.map(Hit::from)
     }
 
     /// Whether no static triangle may meet `shaft`; false when unsure.
@@ -208,6 +276,7 @@ impl World {
         let i = self.dynamic_index(object)?;
         self.instances[i].set_transform(to_render);
         self.top = TopLevel::build(&self.instances);
+        self.dynamic_revision += 1;
         Ok(())
     }
 
@@ -234,6 +303,7 @@ impl World {
         }
         let changed = self.instances[i].set_positions(positions);
         self.top = TopLevel::build(&self.instances);
+        self.dynamic_revision += 1;
         Ok(changed)
     }
 

@@ -15,7 +15,9 @@ use std::time::Instant;
 use glam::{UVec2, Vec3, Vec4};
 use rayon::prelude::*;
 
+use super::band::{bands, resolve, shaded_value, TILE};
 use super::sampling::{film_position, lamp_sample};
+use super::{thread_pool, BackendError};
 use crate::accel::Ray;
 use crate::lightmesh::interpolate::{PointCounts, Scratch, Variant};
 use crate::lightmesh::{LightMesh, LightMeshError, LightMeshStats};
@@ -26,17 +28,6 @@ use crate::render::surface::ShadingPoint;
 use crate::render::{area, whitted, FrameJob};
 use crate::stats::FrameStats;
 
-const TILE: u32 = 16;
-/// Samples per band: bounds the shading-point buffers to a few hundred MB.
-const SAMPLES_PER_BAND: u64 = 1 << 20;
-
-#[derive(Debug, thiserror::Error)]
-#[error("cannot start {threads} render threads: {source}")]
-pub struct BackendError {
-    threads: usize,
-    source: rayon::ThreadPoolBuildError,
-}
-
 /// Renders frames on a rayon pool of its own.
 pub struct CpuBackend {
     pool: rayon::ThreadPool,
@@ -45,14 +36,9 @@ pub struct CpuBackend {
 impl CpuBackend {
     /// A backend with `threads` workers, or one per core when None.
     pub fn new(threads: Option<usize>) -> Result<CpuBackend, BackendError> {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads.unwrap_or(0))
-            .build()
-            .map_err(|source| BackendError {
-                threads: threads.unwrap_or(0),
-                source,
-            })?;
-        Ok(CpuBackend { pool })
+        Ok(CpuBackend {
+            pool: thread_pool(threads)?,
+        })
     }
 
     pub fn threads(&self) -> usize {
@@ -118,16 +104,6 @@ pub enum Shading<'a> {
     Area,
 }
 
-/// Rows of the image split into bands of whole tile rows.
-fn bands(job: &FrameJob) -> impl Iterator<Item = std::ops::Range<u32>> {
-    let samples_per_row = job.width as u64 * job.spp as u64;
-    let tile_rows = (SAMPLES_PER_BAND / (samples_per_row * TILE as u64)).max(1) as u32;
-    let band_height = tile_rows * TILE;
-    let height = job.height;
-    (0..height.div_ceil(band_height))
-        .map(move |band| band * band_height..((band + 1) * band_height).min(height))
-}
-
 fn render_band(
     job: &FrameJob,
     lanes: &LightLanes,
@@ -145,10 +121,7 @@ fn render_band(
     stats.add_stage_time("primary", start.elapsed().as_secs_f64());
 
     let start = Instant::now();
-    let mut covered = vec![false; band_samples];
-    for point in &primary {
-        covered[point.sample as usize] = true;
-    }
+    let primary_count = primary.len();
     let mut points = primary;
     let mut frontier = 0..points.len();
     for _ in 0..job.max_depth {
@@ -223,20 +196,7 @@ fn render_band(
     stats.shading_points += points.len() as u64;
 
     let start = Instant::now();
-    let mut radiance = vec![Vec3::ZERO; band_samples];
-    for (point, value) in points.iter().zip(&shaded) {
-        radiance[point.sample as usize] += *value;
-    }
-    let spp = job.spp as usize;
-    let pixels = radiance
-        .chunks(spp)
-        .zip(covered.chunks(spp))
-        .map(|(samples, hits)| {
-            let colour = samples.iter().sum::<Vec3>() / spp as f32;
-            let coverage = hits.iter().filter(|&&hit| hit).count() as f32 / spp as f32;
-            colour.extend(coverage)
-        })
-        .collect();
+    let pixels = resolve(job, band_samples, &points, primary_count, &shaded);
     stats.add_stage_time("resolve", start.elapsed().as_secs_f64());
     Ok(pixels)
 }
@@ -263,7 +223,7 @@ fn shade_stage<S>(
             let mut counts = PointCounts::default();
             for (offset, (value, point)) in out.iter_mut().zip(points).enumerate() {
                 let (light, point_counts) = direct(scratch, chunk * CHUNK + offset, point);
-                *value = point.weight * (point.emitted() + light);
+                *value = shaded_value(point, light);
                 counts += point_counts;
             }
             counts

@@ -1,8 +1,97 @@
-//! Backends run a frame's stages on some hardware. The CPU backend (rayon)
-//! is the reference; a wgpu backend will implement the same stages as GPU
-//! passes. The core (scene, accel, render) never knows which one runs it.
+//! Backends run a frame's stages on some hardware, behind one seam:
+//! [`Backend`]. The CPU backend (rayon) is the reference and runs every
+//! method; the GPU backend (wgpu compute) runs the ray queries of the
+//! stages (primary and secondary hits, shadow segments) as compute passes
+//! and keeps the rest the CPU's, so its frames match the CPU's. The core
+//! (scene, accel, render) never knows which one runs it.
 
+mod band;
 pub mod cpu;
+pub mod gpu;
 mod sampling;
 
-pub use cpu::CpuBackend;
+pub use cpu::{CpuBackend, Shading};
+pub use gpu::{GpuBackend, GpuError};
+
+use crate::lightmesh::LightMeshError;
+use crate::output::Image;
+use crate::render::FrameJob;
+use crate::settings::BackendKind;
+use crate::stats::FrameStats;
+
+/// Why a backend could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum BackendError {
+    #[error("cannot start {threads} render threads: {source}")]
+    Threads {
+        threads: usize,
+        source: rayon::ThreadPoolBuildError,
+    },
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+/// Why a frame could not be rendered.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// The light mesh refused the frame (a setting the scene cannot meet).
+    #[error(transparent)]
+    LightMesh(#[from] LightMeshError),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+/// The backend a run renders on.
+pub enum Backend {
+    Cpu(CpuBackend),
+    Gpu(Box<GpuBackend>),
+}
+
+impl Backend {
+    /// Starts the backend of `kind` with `threads` CPU workers (one per
+    /// core when None); a GPU backend also finds its adapter.
+    pub fn new(kind: BackendKind, threads: Option<usize>) -> Result<Backend, BackendError> {
+        Ok(match kind {
+            BackendKind::Cpu => Backend::Cpu(CpuBackend::new(threads)?),
+            BackendKind::Gpu => Backend::Gpu(Box::new(GpuBackend::new(threads)?)),
+        })
+    }
+
+    /// CPU worker threads (the GPU backend shades on them).
+    pub fn threads(&self) -> usize {
+        match self {
+            Backend::Cpu(cpu) => cpu.threads(),
+            Backend::Gpu(gpu) => gpu.threads(),
+        }
+    }
+
+    /// The adapter a GPU backend runs on, for the user; None on the CPU.
+    pub fn adapter(&self) -> Option<String> {
+        match self {
+            Backend::Cpu(_) => None,
+            Backend::Gpu(gpu) => Some(gpu.adapter()),
+        }
+    }
+
+    /// Renders one frame; stage times, ray and point counts go to `stats`.
+    pub fn render(
+        &mut self,
+        job: &FrameJob,
+        shading: &mut Shading,
+        stats: &mut FrameStats,
+    ) -> Result<Image, RenderError> {
+        match self {
+            Backend::Cpu(cpu) => Ok(cpu.render(job, shading, stats)?),
+            Backend::Gpu(gpu) => gpu.render(job, shading, stats),
+        }
+    }
+}
+
+/// A rayon pool of `threads` workers, or one per core when None.
+fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, BackendError> {
+    let threads = threads.unwrap_or(0);
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|source| BackendError::Threads { threads, source })
+}

@@ -37,16 +37,29 @@ pub fn direct_light(
 ) -> (Vec3, u64) {
     let mut radiance = Vec3::ZERO;
     let mut shadow_rays = 0;
-    for (index, light) in lights.iter().enumerate() {
-        let Some(sample) = sample_light(point, light, lamp_sample(index as u32)) else {
-            continue;
-        };
+    light_samples(point, lights, lamp_sample, |sample| {
         shadow_rays += 1;
         if !world.occluded(&sample.shadow_ray) {
             radiance += sample.value;
         }
-    }
+    });
     (radiance, shadow_rays)
+}
+
+/// The samples [`direct_light`] weighs, visibility aside, in light order:
+/// one per light whose sample can bring anything. A backend that traces
+/// the shadow rays elsewhere sums the visible values in this order.
+pub fn light_samples(
+    point: &ShadingPoint,
+    lights: &[RenderLight],
+    lamp_sample: impl Fn(u32) -> Vec2,
+    mut each: impl FnMut(LightSample),
+) {
+    for (index, light) in lights.iter().enumerate() {
+        if let Some(sample) = sample_light(point, light, lamp_sample(index as u32)) {
+            each(sample);
+        }
+    }
 }
 
 /// One sample of a light's contribution at a point, visibility aside.

@@ -7,25 +7,35 @@ use glam::Vec3;
 
 use super::omega::{LightLanes, PointLanes, LANES};
 use super::surface::ShadingPoint;
-use crate::accel::World;
+use crate::accel::{Ray, World};
 use crate::bits::set_bits;
 
 /// Direct light at `point` by formula (1); also returns how many shadow
 /// rays it traced (none for lights that cannot reach the point anyway).
-/// Omega comes eight lights at a time; the sum runs in light order.
 pub fn direct_light(point: &ShadingPoint, lights: &LightLanes, world: &World) -> (Vec3, u64) {
     let mut radiance = Vec3::ZERO;
     let mut shadow_rays = 0;
+    light_terms(point, lights, |omega, shadow_ray| {
+        shadow_rays += 1;
+        if !world.occluded(&shadow_ray) {
+            radiance += omega;
+        }
+    });
+    (radiance, shadow_rays)
+}
+
+/// Formula (1)'s terms at `point`, visibility aside: for each light that
+/// can reach it, in light order, its Omega and the shadow segment that
+/// decides whether it counts. Omega comes eight lights at a time. A
+/// backend that traces the segments elsewhere sums the visible terms in
+/// this order, and gets [`direct_light`]'s bits.
+pub fn light_terms(point: &ShadingPoint, lights: &LightLanes, mut term: impl FnMut(Vec3, Ray)) {
     let at = PointLanes::new(point);
     for block in 0..lights.blocks() {
         let omega = lights.omega(&at, block);
         for lane in set_bits(omega.reaching.into()) {
-            shadow_rays += 1;
             let light = &lights.lights()[block * LANES + lane];
-            if !world.occluded(&point.shadow_ray(light)) {
-                radiance += omega.get(lane);
-            }
+            term(omega.get(lane), point.shadow_ray(light));
         }
     }
-    (radiance, shadow_rays)
 }

@@ -1,0 +1,142 @@
+//! The one wgpu device of a run: found once, with the features and limits
+//! the ray queries need, and described once for the user.
+
+use std::fmt;
+
+/// Storage buffers one ray query binds (rays, output, and seven arrays of
+/// the flat world).
+pub const STORAGE_BUFFERS: u32 = 9;
+
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error(
+        "--backend gpu: no GPU adapter with compute shaders was found \
+         (on Linux without a GPU, Debian's mesa-vulkan-drivers gives a software one)"
+    )]
+    NoAdapter,
+    #[error("--backend gpu: the adapter '{adapter}' refused a device: {reason}")]
+    Device { adapter: String, reason: String },
+    #[error("--backend gpu: the adapter '{adapter}' binds {limit} storage buffers per shader, the ray queries need {STORAGE_BUFFERS}")]
+    TooFewBuffers { adapter: String, limit: u32 },
+    #[error("--backend gpu: {what} takes {bytes} bytes, more than the {limit} bytes the adapter '{adapter}' binds at once")]
+    TooLarge {
+        what: &'static str,
+        bytes: u64,
+        limit: u64,
+        adapter: String,
+    },
+    #[error("--backend gpu: {what} is {depth} levels deep, deeper than the {limit} the GPU traversal's stack holds")]
+    TooDeep {
+        what: &'static str,
+        depth: usize,
+        limit: usize,
+    },
+    #[error("--backend gpu renders whitted and area; the light-mesh methods run on --backend cpu")]
+    LightMeshOnGpu,
+    #[error("--backend gpu: reading results back failed: {0}")]
+    Readback(String),
+}
+
+/// The device, its queue, and what the shaders may count on.
+pub struct GpuContext {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    pub limits: wgpu::Limits,
+    /// Whether the adapter has f64 in shaders: then products and quotients
+    /// round as on the CPU (see `shaders/exact_f64.wgsl`).
+    pub exact: bool,
+}
+
+impl GpuContext {
+    /// The first adapter of Vulkan, Metal or D3D12 that wgpu prefers for
+    /// high performance (`WGPU_ADAPTER_NAME` picks another).
+    pub fn new() -> Result<GpuContext, GpuError> {
+        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        descriptor.backends &= wgpu::Backends::PRIMARY;
+        let instance = wgpu::Instance::new(descriptor);
+        let options = wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            ..Default::default()
+        };
+        let adapter = pollster::block_on(instance.request_adapter(&options))
+            .map_err(|_| GpuError::NoAdapter)?;
+        let info = adapter.get_info();
+        let available = adapter.limits();
+        if available.max_storage_buffers_per_shader_stage < STORAGE_BUFFERS {
+            return Err(GpuError::TooFewBuffers {
+                adapter: info.name,
+                limit: available.max_storage_buffers_per_shader_stage,
+            });
+        }
+        let exact = adapter.features().contains(wgpu::Features::SHADER_F64);
+        let features = if exact {
+            wgpu::Features::SHADER_F64
+        } else {
+            wgpu::Features::empty()
+        };
+        let limits = wgpu::Limits {
+            max_storage_buffers_per_shader_stage: STORAGE_BUFFERS,
+            max_storage_buffer_binding_size: available.max_storage_buffer_binding_size,
+            max_buffer_size: available.max_buffer_size,
+            ..wgpu::Limits::downlevel_defaults()
+        };
+        let descriptor = wgpu::DeviceDescriptor {
+            label: Some("lmanim"),
+            required_features: features,
+            required_limits: limits.clone(),
+            ..Default::default()
+        };
+        let (device, queue) =
+            pollster::block_on(adapter.request_device(&descriptor)).map_err(|error| {
+                GpuError::Device {
+                    adapter: info.name.clone(),
+                    reason: error.to_string(),
+                }
+            })?;
+        Ok(GpuContext {
+            device,
+            queue,
+            info,
+            limits,
+            exact,
+        })
+    }
+
+    /// Whether the adapter is a CPU (lavapipe, WARP, SwiftShader): its
+    /// timings say nothing of a GPU's.
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// Fails with the adapter's limit when `bytes` cannot be bound at once.
+    pub fn check_binding(&self, what: &'static str, bytes: u64) -> Result<(), GpuError> {
+        let limit = self.limits.max_storage_buffer_binding_size;
+        if bytes > limit {
+            return Err(GpuError::TooLarge {
+                what,
+                bytes,
+                limit,
+                adapter: self.info.name.clone(),
+            });
+        }
+        Ok(())
+    }
+}
+
+impl fmt::Display for GpuContext {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        let info = &self.info;
+        write!(f, "{} ({:?}", info.name, info.backend)?;
+        if !info.driver.is_empty() {
+            write!(f, ", {} {}", info.driver, info.driver_info)?;
+        }
+        if self.is_software() {
+            write!(f, ", software")?;
+        }
+        if !self.exact {
+            write!(f, ", no f64: shared-edge ties may differ from the CPU")?;
+        }
+        write!(f, ")")
+    }
+}

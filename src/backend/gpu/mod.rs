@@ -1,0 +1,330 @@
+//! The GPU backend (wgpu): the frame's stages as the CPU backend runs
+//! them, with every ray query as a compute pass over the uploaded world
+//! ([`trace`]): primary hits for the camera's samples, the Whitted
+//! recursion level by level, and the shadow segments of formula (1) and of
+//! `--method area`. Making rays, completing hits into shading points,
+//! Omega and resolve stay the CPU's code on the CPU's threads, so a frame
+//! differs from the CPU backend's only where a query answers differently,
+//! and tests compare exactly that, ray by ray.
+//!
+//! Stages wait for their query's answers (a readback per batch of rays):
+//! the point is equal frames first. Moving shading into WGSL as well is
+//! what a real GPU needs for speed (see BENCHMARKS.md).
+
+mod context;
+mod scene;
+mod shaders;
+mod trace;
+
+use std::time::Instant;
+
+use glam::{UVec2, Vec3, Vec4};
+use rayon::prelude::*;
+
+pub use context::{GpuContext, GpuError};
+pub use scene::GpuScene;
+pub use trace::RayQueries;
+
+use super::band::{bands, resolve, shaded_value};
+use super::sampling::{film_position, lamp_sample};
+use super::{thread_pool, BackendError, RenderError, Shading};
+use crate::accel::{Hit, Ray};
+use crate::output::Image;
+use crate::render::omega::LightLanes;
+use crate::render::scatter::secondary_rays;
+use crate::render::surface::ShadingPoint;
+use crate::render::{area, whitted, FrameJob};
+use crate::stats::FrameStats;
+
+/// Points whose shadow segments go to the GPU together: at 64 lights, about
+/// a million segments.
+const SHADE_CHUNK: usize = 16384;
+
+pub struct GpuBackend {
+    pool: rayon::ThreadPool,
+    context: GpuContext,
+    queries: RayQueries,
+    /// The last world rendered, as uploaded.
+    scene: Option<GpuScene>,
+}
+
+impl GpuBackend {
+    /// Finds the adapter and builds the pipelines; `threads` CPU workers
+    /// make rays and shade.
+    pub fn new(threads: Option<usize>) -> Result<GpuBackend, BackendError> {
+        let context = GpuContext::new()?;
+        let queries = RayQueries::new(&context);
+        Ok(GpuBackend {
+            pool: thread_pool(threads)?,
+            context,
+            queries,
+            scene: None,
+        })
+    }
+
+    pub fn threads(&self) -> usize {
+        self.pool.current_num_threads()
+    }
+
+    /// The adapter's name, backend and driver, for the user.
+    pub fn adapter(&self) -> String {
+        self.context.to_string()
+    }
+
+    /// The context and the world of `job` as uploaded, for ray queries
+    /// outside a frame (tests, benchmarks).
+    pub fn queries_for(
+        &mut self,
+        world: &crate::accel::World,
+    ) -> Result<(&GpuContext, &RayQueries, &GpuScene), GpuError> {
+        self.upload(world)?;
+        let scene = self.scene.as_ref().expect("uploaded above");
+        Ok((&self.context, &self.queries, scene))
+    }
+
+    fn upload(&mut self, world: &crate::accel::World) -> Result<(), GpuError> {
+        match &mut self.scene {
+            Some(scene) => scene.update(&self.context, world),
+            None => {
+                self.scene = Some(GpuScene::upload(&self.context, world)?);
+                Ok(())
+            }
+        }
+    }
+
+    /// Renders one frame; stage times, ray and point counts go to `stats`.
+    /// The light-mesh methods are the CPU backend's (settings refuse them
+    /// here before a run starts).
+    pub fn render(
+        &mut self,
+        job: &FrameJob,
+        shading: &mut Shading,
+        stats: &mut FrameStats,
+    ) -> Result<Image, RenderError> {
+        let start = Instant::now();
+        self.upload(job.world)?;
+        stats.add_stage_time("upload", start.elapsed().as_secs_f64());
+        let frame = Frame {
+            job,
+            context: &self.context,
+            queries: &self.queries,
+            scene: self.scene.as_ref().expect("uploaded above"),
+            lanes: LightLanes::new(&job.frame.lights),
+        };
+        let shading = match shading {
+            Shading::Whitted => DeferredShading::Whitted,
+            Shading::Area => DeferredShading::Area,
+            Shading::LightMesh { .. } => return Err(GpuError::LightMeshOnGpu.into()),
+        };
+        self.pool.install(|| {
+            let mut pixels = Vec::with_capacity((job.width * job.height) as usize);
+            for rows in bands(job) {
+                pixels.extend(frame.render_band(rows, shading, stats)?);
+            }
+            Ok(Image {
+                width: job.width,
+                height: job.height,
+                pixels,
+            })
+        })
+    }
+}
+
+/// The direct-light methods whose shadow segments the GPU traces.
+#[derive(Clone, Copy)]
+enum DeferredShading {
+    Whitted,
+    Area,
+}
+
+/// One frame's view of the backend.
+struct Frame<'a> {
+    job: &'a FrameJob<'a>,
+    context: &'a GpuContext,
+    queries: &'a RayQueries,
+    scene: &'a GpuScene,
+    lanes: LightLanes,
+}
+
+/// Where a ray's hit goes: the sample it belongs to, its path weight, its
+/// recursion depth.
+#[derive(Clone, Copy)]
+struct PathVertex {
+    sample: u32,
+    weight: Vec3,
+    depth: u32,
+}
+
+impl Frame<'_> {
+    fn render_band(
+        &self,
+        rows: std::ops::Range<u32>,
+        shading: DeferredShading,
+        stats: &mut FrameStats,
+    ) -> Result<Vec<Vec4>, GpuError> {
+        let job = self.job;
+        let band_samples = ((rows.end - rows.start) * job.width * job.spp) as usize;
+
+        let start = Instant::now();
+        let (rays, vertices) = self.camera_rays(rows.clone());
+        let mut points = self.trace(&rays, &vertices)?;
+        let primary = points.len();
+        stats.rays.primary += rays.len() as u64;
+        stats.add_stage_time("primary", start.elapsed().as_secs_f64());
+
+        let start = Instant::now();
+        let mut frontier = 0..points.len();
+        for _ in 0..job.max_depth {
+            let (rays, vertices): (Vec<Ray>, Vec<PathVertex>) = points[frontier.clone()]
+                .iter()
+                .flat_map(|point| {
+                    secondary_rays(point).map(|secondary| {
+                        let vertex = PathVertex {
+                            sample: point.sample,
+                            weight: secondary.weight,
+                            depth: point.depth + 1,
+                        };
+                        (secondary.ray, vertex)
+                    })
+                })
+                .unzip();
+            stats.rays.secondary += rays.len() as u64;
+            let next = self.trace(&rays, &vertices)?;
+            if next.is_empty() {
+                break;
+            }
+            frontier = points.len()..points.len() + next.len();
+            points.extend(next);
+        }
+        stats.add_stage_time("secondary", start.elapsed().as_secs_f64());
+
+        let start = Instant::now();
+        let band_start = rows.start as u64 * job.width as u64 * job.spp as u64;
+        let (direct, shadow_rays) = self.direct_light(&points, shading, band_start)?;
+        let shaded: Vec<Vec3> = (points.par_iter().zip(&direct))
+            .map(|(point, &light)| shaded_value(point, light))
+            .collect();
+        stats.rays.shadow += shadow_rays;
+        stats.shading_points += points.len() as u64;
+        stats.add_stage_time("shade", start.elapsed().as_secs_f64());
+
+        let start = Instant::now();
+        let pixels = resolve(job, band_samples, &points, primary, &shaded);
+        stats.add_stage_time("resolve", start.elapsed().as_secs_f64());
+        Ok(pixels)
+    }
+
+    /// The camera rays of every sample in the band, in sample order, made
+    /// exactly as the CPU backend makes them.
+    fn camera_rays(&self, rows: std::ops::Range<u32>) -> (Vec<Ray>, Vec<PathVertex>) {
+        let job = self.job;
+        let (width, spp) = (job.width, job.spp);
+        (rows.start..rows.end)
+            .into_par_iter()
+            .flat_map_iter(|y| {
+                (0..width).flat_map(move |x| {
+                    (0..spp).map(move |s| {
+                        let film = film_position(UVec2::new(x, y), width, s, spp);
+                        let ray = job.frame.camera.primary_ray(film, width, job.height);
+                        let vertex = PathVertex {
+                            sample: ((y - rows.start) * width + x) * spp + s,
+                            weight: Vec3::ONE,
+                            depth: 0,
+                        };
+                        (ray, vertex)
+                    })
+                })
+            })
+            .unzip()
+    }
+
+    /// Closest hits of `rays` on the GPU, made into shading points in ray
+    /// order (misses dropped).
+    fn trace(&self, rays: &[Ray], vertices: &[PathVertex]) -> Result<Vec<ShadingPoint>, GpuError> {
+        let job = self.job;
+        let hits: Vec<Option<Hit>> =
+            self.queries
+                .closest_hits(self.context, self.scene, job.world, rays)?;
+        Ok((hits.par_iter().zip(rays).zip(vertices))
+            .filter_map(|((hit, ray), vertex)| {
+                let hit = hit.as_ref()?;
+                Some(ShadingPoint::from_hit(
+                    job.scene,
+                    job.frame,
+                    ray,
+                    hit,
+                    vertex.sample,
+                    vertex.weight,
+                    vertex.depth,
+                ))
+            })
+            .collect())
+    }
+
+    /// Every point's direct light by `shading`, and the shadow segments
+    /// traced: each point's terms are made on the CPU in light order, their
+    /// segments tested on the GPU, and the visible terms summed in that
+    /// order, so a point gets the CPU backend's bits wherever the segments
+    /// get its answers.
+    fn direct_light(
+        &self,
+        points: &[ShadingPoint],
+        shading: DeferredShading,
+        band_start: u64,
+    ) -> Result<(Vec<Vec3>, u64), GpuError> {
+        let job = self.job;
+        let mut direct = Vec::with_capacity(points.len());
+        let mut shadow_rays = 0;
+        for chunk in points.chunks(SHADE_CHUNK) {
+            let terms: Vec<PointTerms> = chunk
+                .par_iter()
+                .map(|point| {
+                    let mut terms = PointTerms::default();
+                    match shading {
+                        DeferredShading::Whitted => {
+                            whitted::light_terms(point, &self.lanes, |value, ray| {
+                                terms.push(value, ray)
+                            })
+                        }
+                        DeferredShading::Area => {
+                            let sample = band_start + point.sample as u64;
+                            let lamp = |light| lamp_sample(sample, job.spp, light, point.depth);
+                            area::light_samples(point, &job.frame.lights, lamp, |s| {
+                                terms.push(s.value, s.shadow_ray)
+                            })
+                        }
+                    }
+                    terms
+                })
+                .collect();
+            let rays: Vec<Ray> = terms.iter().flat_map(|t| t.rays.iter().copied()).collect();
+            shadow_rays += rays.len() as u64;
+            let occluded = self.queries.occluded(self.context, self.scene, &rays)?;
+            let mut answers = occluded.into_iter();
+            for point_terms in &terms {
+                let mut radiance = Vec3::ZERO;
+                for (value, blocked) in point_terms.values.iter().zip(answers.by_ref()) {
+                    if !blocked {
+                        radiance += *value;
+                    }
+                }
+                direct.push(radiance);
+            }
+        }
+        Ok((direct, shadow_rays))
+    }
+}
+
+/// One point's direct-light terms in light order, visibility aside.
+#[derive(Default)]
+struct PointTerms {
+    values: Vec<Vec3>,
+    rays: Vec<Ray>,
+}
+
+impl PointTerms {
+    fn push(&mut self, value: Vec3, ray: Ray) {
+        self.values.push(value);
+        self.rays.push(ray);
+    }
+}

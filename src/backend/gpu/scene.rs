@@ -1,0 +1,172 @@
+//! The world on the GPU: the flat arrays of `accel::flat` in storage
+//! buffers. The static part goes up once per world; the dynamic part again
+//! only when the world's dynamic revision moved (an object moved or
+//! deformed), so a fly-through over a still city uploads nothing.
+
+use bytemuck::{Pod, Zeroable};
+use wgpu::util::DeviceExt;
+
+use super::context::{GpuContext, GpuError};
+use crate::accel::flat::{FlatDynamic, FlatStatic, FlatTriangles};
+use crate::accel::World;
+
+/// Deepest static wide tree the shader's stack holds (`WIDE_STACK` = 96
+/// entries, seven a level plus one).
+const WIDE_DEPTH_LIMIT: usize = 13;
+/// Deepest binary tree the shader's stacks hold (`BINARY_STACK`).
+const BINARY_DEPTH_LIMIT: usize = 64;
+
+/// The uniform every ray query reads; `scene.wgsl`'s `Params`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Params {
+    pub ray_count: u32,
+    pub static_node_count: u32,
+    pub top_node_offset: u32,
+    pub top_node_count: u32,
+    pub top_members_offset: u32,
+    pub binary_scale: f32,
+    pub inv_limit: f32,
+    pub _pad: u32,
+}
+
+struct StaticBuffers {
+    nodes: wgpu::Buffer,
+    vertices: wgpu::Buffer,
+    ids: wgpu::Buffer,
+    node_count: u32,
+}
+
+struct DynamicBuffers {
+    nodes: wgpu::Buffer,
+    vertices: wgpu::Buffer,
+    ids: wgpu::Buffer,
+    instances: wgpu::Buffer,
+    top_offset: u32,
+    top_count: u32,
+    top_members_offset: u32,
+}
+
+/// One world's buffers, and which world and revision they hold.
+pub struct GpuScene {
+    world: u64,
+    revision: u64,
+    static_part: StaticBuffers,
+    dynamic_part: DynamicBuffers,
+}
+
+impl GpuScene {
+    pub fn upload(context: &GpuContext, world: &World) -> Result<GpuScene, GpuError> {
+        Ok(GpuScene {
+            world: world.id(),
+            revision: world.dynamic_revision(),
+            static_part: upload_static(context, &world.flat_static())?,
+            dynamic_part: upload_dynamic(context, &world.flat_dynamic())?,
+        })
+    }
+
+    /// Brings the buffers up to `world`: everything for another world, the
+    /// dynamic part for a newer revision of this one, else nothing.
+    pub fn update(&mut self, context: &GpuContext, world: &World) -> Result<(), GpuError> {
+        if world.id() != self.world {
+            *self = GpuScene::upload(context, world)?;
+        } else if world.dynamic_revision() != self.revision {
+            self.dynamic_part = upload_dynamic(context, &world.flat_dynamic())?;
+            self.revision = world.dynamic_revision();
+        }
+        Ok(())
+    }
+
+    /// The uniform for a batch of `ray_count` rays over this scene.
+    pub fn params(&self, ray_count: u32) -> Params {
+        Params {
+            ray_count,
+            static_node_count: self.static_part.node_count,
+            top_node_offset: self.dynamic_part.top_offset,
+            top_node_count: self.dynamic_part.top_count,
+            top_members_offset: self.dynamic_part.top_members_offset,
+            binary_scale: crate::accel::node_test::BINARY_SCALE,
+            inv_limit: crate::accel::node_test::INV_LIMIT,
+            _pad: 0,
+        }
+    }
+
+    /// Bindings 2 to 6, 8 and 9 of `scene.wgsl`.
+    pub fn entries(&self) -> [wgpu::BindGroupEntry<'_>; 7] {
+        fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+            wgpu::BindGroupEntry {
+                binding,
+                resource: buffer.as_entire_binding(),
+            }
+        }
+        let (s, d) = (&self.static_part, &self.dynamic_part);
+        [
+            entry(2, &s.nodes),
+            entry(3, &d.nodes),
+            entry(4, &s.vertices),
+            entry(5, &s.ids),
+            entry(6, &d.instances),
+            entry(8, &d.vertices),
+            entry(9, &d.ids),
+        ]
+    }
+}
+
+fn upload_static(context: &GpuContext, flat: &FlatStatic) -> Result<StaticBuffers, GpuError> {
+    if flat.depth > WIDE_DEPTH_LIMIT {
+        return Err(GpuError::TooDeep {
+            what: "the static BVH",
+            depth: flat.depth,
+            limit: WIDE_DEPTH_LIMIT,
+        });
+    }
+    Ok(StaticBuffers {
+        nodes: storage(context, "static BVH nodes", &flat.nodes)?,
+        vertices: storage(context, "static triangles", &flat.triangles.vertices)?,
+        ids: storage(context, "static triangle ids", &flat.triangles.sources)?,
+        node_count: flat.nodes.len() as u32,
+    })
+}
+
+fn upload_dynamic(context: &GpuContext, flat: &FlatDynamic) -> Result<DynamicBuffers, GpuError> {
+    if flat.depth > BINARY_DEPTH_LIMIT {
+        return Err(GpuError::TooDeep {
+            what: "a dynamic object's BVH",
+            depth: flat.depth,
+            limit: BINARY_DEPTH_LIMIT,
+        });
+    }
+    let FlatTriangles { vertices, sources } = &flat.triangles;
+    let mut ids: Vec<u32> = bytemuck::cast_slice(sources).to_vec();
+    let top_members_offset = ids.len() as u32;
+    ids.extend(&flat.top_members);
+    Ok(DynamicBuffers {
+        nodes: storage(context, "dynamic BVH nodes", &flat.nodes)?,
+        vertices: storage(context, "dynamic triangles", vertices)?,
+        ids: storage(context, "dynamic triangle ids", &ids)?,
+        instances: storage(context, "dynamic instances", &flat.instances)?,
+        top_offset: flat.top_offset,
+        top_count: flat.top_count,
+        top_members_offset,
+    })
+}
+
+/// A read-only storage buffer holding `items`; one zeroed item when there
+/// are none, since a binding cannot be empty.
+pub fn storage<T: Pod>(
+    context: &GpuContext,
+    what: &'static str,
+    items: &[T],
+) -> Result<wgpu::Buffer, GpuError> {
+    let zero = [T::zeroed()];
+    let items = if items.is_empty() { &zero[..] } else { items };
+    let contents: &[u8] = bytemuck::cast_slice(items);
+    context.check_binding(what, contents.len() as u64)?;
+    Ok(context
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(what),
+            contents,
+            usage: wgpu::BufferUsages::STORAGE,
+        }))
+}

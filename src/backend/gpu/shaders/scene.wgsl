@@ -1,0 +1,70 @@
+// The world in flat form (Rust side: `accel::flat`), bound once for every
+// ray query: the static wide BVH, the dynamic objects' binary BVHs and the
+// top level over them, triangle vertices and ids. Layouts are declared on
+// the Rust side as `Pod` structs; a test compares sizes and offsets.
+
+struct Params {
+    ray_count: u32,
+    static_node_count: u32,
+    top_node_offset: u32,
+    top_node_count: u32,
+    top_members_offset: u32,
+    // (1 + 2 gamma(3)): how much a slab exit may be understated by rounding.
+    binary_scale: f32,
+    // Stand-in for 1 / 0 and the largest inverse used.
+    inv_limit: f32,
+    _pad: u32,
+}
+
+// Eight children: their boxes as planes[(axis * 2 + side) * 8 + child]
+// (side 0 the min planes, 1 the max planes), where each leads, and which
+// slots hold a child at all (an empty slot's planes are never read).
+struct WideNode {
+    planes: array<f32, 48>,
+    child: array<u32, 8>,
+    // Four 8-bit leaf primitive counts per word (0: an inner node).
+    counts: array<u32, 2>,
+    valid: u32,
+    _pad: array<u32, 5>,
+}
+
+struct BinaryNode {
+    min: vec3<f32>,
+    prim_count: u32,
+    max: vec3<f32>,
+    first_index: u32,
+}
+
+// A dynamic object: the affine map from render to object space, by
+// columns, and where its nodes and triangles start.
+struct Instance {
+    to_object: array<vec4<f32>, 4>,
+    node_offset: u32,
+    slot_offset: u32,
+    // 0 while the placement is singular: the instance is hit by nothing.
+    valid: u32,
+    _pad: u32,
+}
+
+struct Ray {
+    origin: vec3<f32>,
+    t_max: f32,
+    direction: vec3<f32>,
+    _pad: f32,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> rays: array<Ray>;
+@group(0) @binding(2) var<storage, read> wide_nodes: array<WideNode>;
+@group(0) @binding(3) var<storage, read> binary_nodes: array<BinaryNode>;
+// Nine floats per triangle slot, in slot order: the static mesh's in
+// render space, and every instance's (from its `slot_offset`) in its
+// object space.
+@group(0) @binding(4) var<storage, read> static_vertices: array<f32>;
+@group(0) @binding(8) var<storage, read> dynamic_vertices: array<f32>;
+// Per slot its source (object, triangle), two words. The dynamic array
+// ends with the top level's members (the instance index of each of its
+// primitive slots), from `params.top_members_offset`.
+@group(0) @binding(5) var<storage, read> static_ids: array<u32>;
+@group(0) @binding(9) var<storage, read> dynamic_ids: array<u32>;
+@group(0) @binding(6) var<storage, read> instances: array<Instance>;
