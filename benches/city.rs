@@ -16,7 +16,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use lmanim::anim::pose::ClipSelection;
-use lmanim::backend::CpuBackend;
+use lmanim::backend::Backend;
 use lmanim::schedule::{FrameSet, Timeline};
 use lmanim::sequence::Sequence;
 use lmanim::settings::Settings;
@@ -37,7 +37,9 @@ fn main() {
         settings.height = h.parse().expect("height");
     }
     settings.validate().expect("settings");
-    let backend = CpuBackend::new(settings.threads).expect("thread pool");
+    let mut backend =
+        lmanim::backend::Backend::new(lmanim::settings::BackendKind::Cpu, settings.threads)
+            .expect("thread pool");
     let timeline = Timeline { fps: settings.fps };
     println!(
         "{SCENE} (clip {}): {}x{} {}, {} threads, frames {}..={}",
@@ -56,7 +58,12 @@ fn main() {
     let started = Instant::now();
     let mut reused = Vec::new();
     for &frame in frames.frames() {
-        let stats = render(&mut sequence, &backend, &settings, timeline.time_of(frame));
+        let stats = render(
+            &mut sequence,
+            &mut backend,
+            &settings,
+            timeline.time_of(frame),
+        );
         let mesh = stats.lightmesh.unwrap_or_default();
         println!(
             "| {frame} | {:.2} | {:.4} | {} | {} | {} | {:.2}% |",
@@ -75,7 +82,7 @@ fn main() {
     if cold_every > 0 {
         for &frame in frames.frames().iter().step_by(cold_every) {
             let mut fresh = load();
-            let stats = render(&mut fresh, &backend, &settings, timeline.time_of(frame));
+            let stats = render(&mut fresh, &mut backend, &settings, timeline.time_of(frame));
             println!("cold frame {frame}: {:.2} s", stats.seconds);
             cold.push(stats.seconds);
         }
@@ -161,7 +168,7 @@ fn load() -> Sequence {
 
 fn render(
     sequence: &mut Sequence,
-    backend: &CpuBackend,
+    backend: &mut Backend,
     settings: &Settings,
     time: f64,
 ) -> FrameStats {

@@ -18,7 +18,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use lmanim::authoring::city::{city_block, CityParams};
-use lmanim::backend::CpuBackend;
+use lmanim::backend::Backend;
 use lmanim::sequence::Sequence;
 use lmanim::settings::{Method, Settings};
 use lmanim::stats::FrameStats;
@@ -36,7 +36,8 @@ fn main() {
         })
         .collect();
     let dir = tempfile::tempdir().expect("temporary directory");
-    let backend = CpuBackend::new(None).expect("thread pool");
+    let mut backend = lmanim::backend::Backend::new(lmanim::settings::BackendKind::Cpu, None)
+        .expect("thread pool");
     println!("threads: {}", backend.threads());
     let mut stage_rows = Vec::new();
     // The 64-lamp LMM1 case at the largest size, for the lattice sweep.
@@ -67,7 +68,7 @@ fn main() {
                     method,
                     ..Settings::default()
                 };
-                let (seconds, stats) = render_cold(&backend, &path, &settings);
+                let (seconds, stats) = render_cold(&mut backend, &path, &settings);
                 if method == Method::Whitted {
                     whitted_seconds = seconds;
                 }
@@ -130,7 +131,7 @@ fn main() {
         for scale in [1.5f32, 2.0, 3.0] {
             let mut settings = settings.clone();
             settings.lightmesh.h = Some(default_h * scale);
-            let (seconds, stats) = render_cold(&backend, &path, &settings);
+            let (seconds, stats) = render_cold(&mut backend, &path, &settings);
             let mesh = stats.lightmesh.unwrap_or_default();
             println!(
                 "| {scale} | {:.3} | {seconds:.2} | {:.1}× | {} | {} |",
@@ -157,7 +158,7 @@ fn main() {
             ..Settings::default()
         };
         settings.lightmesh.ki = ki;
-        let (_, stats) = render_cold(&backend, &path, &settings);
+        let (_, stats) = render_cold(&mut backend, &path, &settings);
         let mesh = stats.lightmesh.unwrap_or_default();
         let volume = 2.0 / 3.0 * std::f64::consts::PI * f64::from(ki).powi(3);
         println!(
@@ -168,7 +169,7 @@ fn main() {
 }
 
 /// One frame of the scene at `path`, from scratch: its time and statistics.
-fn render_cold(backend: &CpuBackend, path: &Path, settings: &Settings) -> (f64, FrameStats) {
+fn render_cold(backend: &mut Backend, path: &Path, settings: &Settings) -> (f64, FrameStats) {
     let mut sequence = Sequence::load(path).expect("city loads");
     let placed = sequence.place(settings).expect("camera");
     let mut stats = FrameStats::default();

@@ -9,7 +9,7 @@
 
 use glam::{Quat, Vec2, Vec3};
 use lmanim::authoring::{shapes, GltfBuilder, NodeDesc, Primitive};
-use lmanim::backend::CpuBackend;
+use lmanim::backend::Backend;
 use lmanim::output::Image;
 use lmanim::scene::{Camera, Light, LightKind, Material, Projection};
 use lmanim::sequence::Sequence;
@@ -90,7 +90,7 @@ fn scene(radius: f32) -> GltfBuilder {
     b
 }
 
-fn render(path: &std::path::Path, settings: &Settings, backend: &CpuBackend) -> (Image, f64) {
+fn render(path: &std::path::Path, settings: &Settings, backend: &mut Backend) -> (Image, f64) {
     let mut sequence = Sequence::load(path).expect("scene loads");
     let placed = sequence.place(settings).expect("camera");
     let mut stats = FrameStats::default();
@@ -103,7 +103,8 @@ fn render(path: &std::path::Path, settings: &Settings, backend: &CpuBackend) -> 
 
 fn main() {
     let dir = tempfile::tempdir().expect("temporary directory");
-    let backend = CpuBackend::new(None).expect("threads");
+    let mut backend =
+        lmanim::backend::Backend::new(lmanim::settings::BackendKind::Cpu, None).expect("threads");
     let size = 160;
     println!("| R (m) | method | h·kI / R | h (m) | RMS error / lit | seconds |");
     println!("|---|---|---|---|---|---|");
@@ -122,7 +123,7 @@ fn main() {
                 spp: 1024,
                 ..base.clone()
             },
-            &backend,
+            &mut backend,
         );
         if let Some(dir) = std::env::var_os("LMANIM_BENCH_DUMP") {
             let name = format!("area-r{radius}.png");
@@ -142,7 +143,7 @@ fn main() {
             (sum / region.len().max(1) as f64).sqrt()
         };
         println!("| {radius} | area 1024 spp | — | — | 0 (reference) | {reference_seconds:.2} |");
-        let (whitted, seconds) = render(&path, &base, &backend);
+        let (whitted, seconds) = render(&path, &base, &mut backend);
         println!(
             "| {radius} | whitted | — | — | {:.4} | {seconds:.2} |",
             error(&whitted)
@@ -155,7 +156,7 @@ fn main() {
                     spp,
                     ..base.clone()
                 },
-                &backend,
+                &mut backend,
             );
             println!(
                 "| {radius} | area {spp} spp | — | — | {:.4} | {seconds:.2} |",
@@ -171,7 +172,7 @@ fn main() {
                 };
                 settings.lightmesh.h = Some(h);
                 settings.lightmesh.ki = KI;
-                let (image, seconds) = render(&path, &settings, &backend);
+                let (image, seconds) = render(&path, &settings, &mut backend);
                 if let Some(dir) = std::env::var_os("LMANIM_BENCH_DUMP") {
                     let name = format!("{method}-r{radius}-s{scale}.png");
                     lmanim::output::write_png_preview(

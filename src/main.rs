@@ -196,6 +196,12 @@ fn init_logging(quiet: bool) {
     };
     env_logger::Builder::new()
         .filter_level(level)
+        // wgpu relays the Vulkan loader's and driver's chatter (missing
+        // ICD files, software adapters) as errors; what matters reaches
+        // the user as lmanim's own one-line error.
+        .filter_module("wgpu_hal", log::LevelFilter::Off)
+        .filter_module("wgpu_core", log::LevelFilter::Off)
+        .filter_module("naga", log::LevelFilter::Off)
         .format(|out, record| {
             writeln!(
                 out,
@@ -233,6 +239,9 @@ fn run(cli: &RenderArgs) -> Result<(), Failure> {
                     cli.scene.display()
                 )
             });
+        }
+        if let (0, Some(adapter), false) = (done.index, done.adapter, cli.quiet) {
+            progress.suspend(|| eprintln!("GPU adapter: {adapter}"));
         }
         if let (0, Some(mesh), false) = (done.index, done.stats.lightmesh, cli.quiet) {
             let source = if settings.lightmesh.h.is_some() {

@@ -76,6 +76,8 @@ pub struct FrameDone<'a> {
     pub path: &'a Path,
     /// The scene brought no camera; an automatic one framed it.
     pub automatic_camera: bool,
+    /// The GPU adapter the run renders on, if any.
+    pub adapter: Option<&'a str>,
 }
 
 /// A loaded scene with its world built, ready to render frames.
@@ -432,9 +434,6 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
         ));
     }
     let mut backend = Backend::new(settings.backend, settings.threads)?;
-    if let Some(adapter) = backend.adapter() {
-        log::info!("GPU adapter: {adapter}");
-    }
     let mut sequence = Sequence::load(job.scene_path)?;
     sequence.set_cache_dir(settings.cache_dir.as_ref().map(PathBuf::from));
     if let Some(clip) = &settings.clip {
@@ -448,6 +447,7 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
     let mut run = RunStats {
         threads: backend.threads(),
         method: settings.method.to_string(),
+        adapter: backend.adapter(),
         ..RunStats::default()
     };
     let timeline = Timeline { fps: settings.fps };
@@ -473,6 +473,7 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
             stats: &stats,
             path: &path,
             automatic_camera: placed.automatic_camera,
+            adapter: run.adapter.as_deref(),
         });
         run.frames.push(stats);
     }

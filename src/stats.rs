@@ -60,4 +60,8 @@ pub struct RunStats {
     pub total_seconds: f64,
     pub threads: usize,
     pub method: String,
+    /// The GPU adapter a `--backend gpu` run rendered on (name, backend,
+    /// driver); absent on the CPU.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub adapter: Option<String>,
 }

@@ -12,7 +12,6 @@ mod node_support;
 
 use std::path::{Path, PathBuf};
 
-use lmanim::backend::CpuBackend;
 use lmanim::scene::{LightKind, SceneDesc, Target};
 use lmanim::sequence::Sequence;
 use lmanim::settings::{Method, Settings};
@@ -125,7 +124,8 @@ fn frames_of_the_fly_through_render() {
     assert_eq!(settings.camera.as_deref(), Some("flythrough"));
     settings.width = 64;
     settings.height = 36;
-    let backend = CpuBackend::new(Some(2)).expect("backend");
+    let mut backend = lmanim::backend::Backend::new(lmanim::settings::BackendKind::Cpu, Some(2))
+        .expect("backend");
     let mut sequence = Sequence::load(&city_path()).expect("load the city");
     for frame in [0u32, 120] {
         let time = f64::from(frame) / settings.fps;
@@ -134,7 +134,7 @@ fn frames_of_the_fly_through_render() {
             .advance(time, &settings, &mut stats)
             .expect("advance");
         let image = sequence
-            .render(&backend, &placed, &settings, &mut stats)
+            .render(&mut backend, &placed, &settings, &mut stats)
             .expect("render");
         assert!(
             image.pixels.iter().all(|pixel| pixel.is_finite()),

@@ -11,7 +11,7 @@ use std::sync::{Barrier, Mutex, OnceLock};
 
 use common::*;
 use glam::{DMat4, DVec3, Vec3};
-use lmanim::backend::CpuBackend;
+
 use lmanim::lightmesh::cache::{CacheKey, StaticMaskCache};
 use lmanim::output::Image;
 use lmanim::scene::animation::AnimationClip;
@@ -109,7 +109,8 @@ fn render(
     cache: Option<&Path>,
     times: &[f64],
 ) -> (Vec<Image>, Vec<FrameStats>, Sequence) {
-    let backend = CpuBackend::new(Some(2)).unwrap();
+    let mut backend =
+        lmanim::backend::Backend::new(lmanim::settings::BackendKind::Cpu, Some(2)).unwrap();
     let mut sequence = Sequence::new(scene.clone(), "yard".into()).unwrap();
     sequence.set_cache_dir(cache.map(Path::to_path_buf));
     let mut images = Vec::new();
@@ -119,7 +120,7 @@ fn render(
         let placed = sequence.advance(time, settings, &mut stats).unwrap();
         images.push(
             sequence
-                .render(&backend, &placed, settings, &mut stats)
+                .render(&mut backend, &placed, settings, &mut stats)
                 .unwrap(),
         );
         all_stats.push(stats);

@@ -384,11 +384,12 @@ fn a_lattice_too_fine_for_the_memory_limit_is_a_clear_error() {
     let mut settings = with_method(settings(64, 64), Method::Lmm1, 1e-4, 2.5);
     settings.lightmesh.max_memory_mib = 64;
     let mut sequence = lmanim::sequence::Sequence::new(lit_floor(), "floor.gltf".into()).unwrap();
-    let backend = lmanim::backend::CpuBackend::new(Some(2)).unwrap();
+    let mut backend =
+        lmanim::backend::Backend::new(lmanim::settings::BackendKind::Cpu, Some(2)).unwrap();
     let placed = sequence.place(&settings).unwrap();
     let mut stats = Default::default();
     let error = sequence
-        .render(&backend, &placed, &settings, &mut stats)
+        .render(&mut backend, &placed, &settings, &mut stats)
         .unwrap_err();
     let message = error.to_string();
     assert!(

@@ -11,7 +11,7 @@ mod common;
 
 use common::*;
 use glam::{DMat4, DVec3, Vec3};
-use lmanim::backend::CpuBackend;
+
 use lmanim::output::Image;
 use lmanim::scene::animation::{AnimationClip, Channel, Interpolation, Sampler};
 use lmanim::scene::pose::dynamic_nodes;
@@ -110,7 +110,8 @@ fn settings_for(method: Method) -> Settings {
 
 /// Every time rendered by one sequence, with its stats.
 fn rendered_in_sequence(scene: &SceneDesc, settings: &Settings) -> Vec<(Image, FrameStats)> {
-    let backend = CpuBackend::new(Some(2)).unwrap();
+    let mut backend =
+        lmanim::backend::Backend::new(lmanim::settings::BackendKind::Cpu, Some(2)).unwrap();
     let mut sequence = Sequence::new(scene.clone(), "street".into()).unwrap();
     TIMES
         .iter()
@@ -118,7 +119,7 @@ fn rendered_in_sequence(scene: &SceneDesc, settings: &Settings) -> Vec<(Image, F
             let mut stats = FrameStats::default();
             let placed = sequence.advance(time, settings, &mut stats).unwrap();
             let image = sequence
-                .render(&backend, &placed, settings, &mut stats)
+                .render(&mut backend, &placed, settings, &mut stats)
                 .unwrap();
             (image, stats)
         })
@@ -126,12 +127,13 @@ fn rendered_in_sequence(scene: &SceneDesc, settings: &Settings) -> Vec<(Image, F
 }
 
 fn rendered_cold(scene: &SceneDesc, settings: &Settings, time: f64) -> Image {
-    let backend = CpuBackend::new(Some(2)).unwrap();
+    let mut backend =
+        lmanim::backend::Backend::new(lmanim::settings::BackendKind::Cpu, Some(2)).unwrap();
     let mut sequence = Sequence::new(scene.clone(), "street".into()).unwrap();
     let mut stats = FrameStats::default();
     let placed = sequence.advance(time, settings, &mut stats).unwrap();
     sequence
-        .render(&backend, &placed, settings, &mut stats)
+        .render(&mut backend, &placed, settings, &mut stats)
         .unwrap()
 }
 
@@ -178,14 +180,15 @@ fn frames_with_reused_masks_equal_frames_rendered_cold() {
 fn camera_only_animation_recomputes_no_bit() {
     let scene = street(false, false, true);
     let settings = settings_for(Method::Lmm1);
-    let backend = CpuBackend::new(Some(2)).unwrap();
+    let mut backend =
+        lmanim::backend::Backend::new(lmanim::settings::BackendKind::Cpu, Some(2)).unwrap();
     let mut sequence = Sequence::new(scene, "street".into()).unwrap();
     let mut computed = 0;
     for (index, &time) in TIMES.iter().enumerate() {
         let mut stats = FrameStats::default();
         let placed = sequence.advance(time, &settings, &mut stats).unwrap();
         sequence
-            .render(&backend, &placed, &settings, &mut stats)
+            .render(&mut backend, &placed, &settings, &mut stats)
             .unwrap();
         if index > 0 {
             assert!(stats.camera_moved && stats.objects_moved == 0 && stats.lights_moved == 0);

@@ -169,11 +169,13 @@ pub fn render(scene: SceneDesc, settings: &Settings) -> Image {
 
 pub fn render_with_stats(scene: SceneDesc, settings: &Settings) -> (Image, FrameStats) {
     let mut sequence = Sequence::new(scene, "test".into()).expect("scene places");
-    let backend = lmanim::backend::CpuBackend::new(settings.threads).expect("thread pool");
+    let mut backend =
+        lmanim::backend::Backend::new(lmanim::settings::BackendKind::Cpu, settings.threads)
+            .expect("thread pool");
     let placed = sequence.place(settings).expect("camera");
     let mut stats = FrameStats::default();
     let image = sequence
-        .render(&backend, &placed, settings, &mut stats)
+        .render(&mut backend, &placed, settings, &mut stats)
         .expect("frame renders");
     (image, stats)
 }

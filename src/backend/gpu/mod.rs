@@ -12,9 +12,9 @@
 //! what a real GPU needs for speed (see BENCHMARKS.md).
 
 mod context;
-mod scene;
+pub(crate) mod scene;
 mod shaders;
-mod trace;
+pub(crate) mod trace;
 
 use std::time::Instant;
 

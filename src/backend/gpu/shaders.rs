@@ -77,4 +77,56 @@ mod tests {
             }
         }
     }
+
+    /// The WGSL structs have the sizes of the Rust records uploaded into
+    /// them, field offsets included: a layout drift fails here, not as
+    /// garbage on the GPU.
+    #[test]
+    fn wgsl_structs_match_the_uploaded_records() {
+        use crate::accel::flat::{FlatBinaryNode, FlatInstance, FlatWideNode};
+        use crate::backend::gpu::scene::Params;
+        use crate::backend::gpu::trace::{GpuRay, HitRecord};
+        let module = naga::front::wgsl::parse_str(&source(Query::ClosestHit, Arithmetic::PlainF32))
+            .expect("parse");
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).expect("layout");
+        let expected = [
+            (
+                "Params",
+                size_of::<Params>(),
+                vec![0, 4, 8, 12, 16, 20, 24, 28],
+            ),
+            (
+                "WideNode",
+                size_of::<FlatWideNode>(),
+                vec![0, 192, 224, 232, 236],
+            ),
+            (
+                "BinaryNode",
+                size_of::<FlatBinaryNode>(),
+                vec![0, 12, 16, 28],
+            ),
+            (
+                "Instance",
+                size_of::<FlatInstance>(),
+                vec![0, 64, 68, 72, 76],
+            ),
+            ("Ray", size_of::<GpuRay>(), vec![0, 12, 16, 28]),
+            ("HitRecord", size_of::<HitRecord>(), vec![0, 4, 8, 12, 16]),
+        ];
+        for (name, size, offsets) in expected {
+            let (handle, ty) = module
+                .types
+                .iter()
+                .find(|(_, ty)| ty.name.as_deref() == Some(name))
+                .unwrap_or_else(|| panic!("no struct {name}"));
+            assert_eq!(layouter[handle].size as usize, size, "{name}");
+            let naga::TypeInner::Struct { members, .. } = &ty.inner else {
+                panic!("{name} is not a struct");
+            };
+            let found: Vec<u32> = members.iter().map(|m| m.offset).collect();
+            let offsets: Vec<u32> = offsets.into_iter().map(|o| o as u32).collect();
+            assert_eq!(found, offsets, "{name}");
+        }
+    }
 }
