@@ -9,6 +9,7 @@
 //! passes on a developer's machine, but fails when `CI` is set.
 
 mod anim_support;
+mod common;
 
 use std::path::Path;
 
@@ -18,6 +19,7 @@ use lmanim::backend::GpuBackend;
 use lmanim::output::{read_exr, Image};
 
 use anim_support::lmanim;
+use common::cube;
 
 /// The GPU backend, or None (with the reason on stderr) off CI when no
 /// adapter exists.
@@ -30,38 +32,6 @@ fn gpu() -> Option<GpuBackend> {
         }
         Err(error) => panic!("CI must have a GPU adapter (mesa-vulkan-drivers): {error}"),
     }
-}
-
-/// A cube `[-1, 1]^3` split into `n × n` quads a face, vertices shared.
-fn cube(n: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    let mut index = std::collections::HashMap::new();
-    let mut vertex = |v: Vec3, positions: &mut Vec<Vec3>| {
-        let key = (v * n as f32).round().as_ivec3().to_array();
-        *index.entry(key).or_insert_with(|| {
-            positions.push(v);
-            positions.len() as u32 - 1
-        })
-    };
-    for axis in 0..3 {
-        for side in [-1.0f32, 1.0] {
-            let (u, v) = (Vec3::AXES[(axis + 1) % 3], Vec3::AXES[(axis + 2) % 3]);
-            let w = Vec3::AXES[axis] * side;
-            let at = |i: u32, j: u32| {
-                w + u * (2.0 * i as f32 / n as f32 - 1.0) + v * (2.0 * j as f32 / n as f32 - 1.0)
-            };
-            for j in 0..n {
-                for i in 0..n {
-                    let q = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)]
-                        .map(|x| vertex(x, &mut positions));
-                    triangles.push([q[0], q[1], q[2]]);
-                    triangles.push([q[0], q[2], q[3]]);
-                }
-            }
-        }
-    }
-    (positions, triangles)
 }
 
 /// Rays from `origins` at every vertex and edge midpoint of the placed

@@ -289,3 +289,36 @@ pub fn half_morphing_sheet(x: f32, half_width: f32, height: f32, cell: f32, drop
     mesh.morph_weights = vec![0.0];
     mesh
 }
+
+/// A cube `[-1, 1]^3` with each face split into `n × n` quads, vertices shared
+/// along face borders.
+pub fn cube(n: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut index = std::collections::HashMap::new();
+    let mut p = Vec::new();
+    let mut tris = Vec::new();
+    let mut vertex = |v: Vec3, p: &mut Vec<Vec3>| {
+        let key = (v * n as f32).round().as_ivec3().to_array();
+        *index.entry(key).or_insert_with(|| {
+            p.push(v);
+            p.len() as u32 - 1
+        })
+    };
+    for axis in 0..3 {
+        for side in [-1.0f32, 1.0] {
+            let (u, v) = (Vec3::AXES[(axis + 1) % 3], Vec3::AXES[(axis + 2) % 3]);
+            let w = Vec3::AXES[axis] * side;
+            let at = |i: u32, j: u32| {
+                w + u * (2.0 * i as f32 / n as f32 - 1.0) + v * (2.0 * j as f32 / n as f32 - 1.0)
+            };
+            for j in 0..n {
+                for i in 0..n {
+                    let q = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)]
+                        .map(|x| vertex(x, &mut p));
+                    tris.push([q[0], q[1], q[2]]);
+                    tris.push([q[0], q[2], q[3]]);
+                }
+            }
+        }
+    }
+    (p, tris)
+}
