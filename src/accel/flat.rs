@@ -171,15 +171,13 @@ impl FlatDynamic {
 fn flat_wide_node(node: &super::wide::WideNode) -> FlatWideNode {
     let mut flat = FlatWideNode::zeroed();
     for child in 0..8 {
-        let (half, lane) = (child / 4, child % 4);
-        let plane = |axis: usize, side: usize| node.planes[axis][side][half][lane];
-        if (0..3).any(|axis| plane(axis, 0) > plane(axis, 1)) {
+        let Some(corners) = node.child_box(child) else {
             continue;
-        }
+        };
         flat.valid |= 1 << child;
         for axis in 0..3 {
-            for side in 0..2 {
-                flat.planes[(axis * 2 + side) * 8 + child] = plane(axis, side);
+            for (side, corner) in corners.iter().enumerate() {
+                flat.planes[(axis * 2 + side) * 8 + child] = corner[axis];
             }
         }
         flat.child[child] = node.child[child];

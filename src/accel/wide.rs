@@ -22,6 +22,17 @@ pub struct WideNode {
     pub prim_count: [u8; 8],
 }
 
+impl WideNode {
+    /// The box of the child in `slot` as `[min, max]`, or None for an empty
+    /// slot.
+    pub fn child_box(&self, slot: usize) -> Option<[Vec3A; 2]> {
+        let (half, lane) = (slot / 4, slot % 4);
+        let [min, max] = [0, 1]
+            .map(|side| Vec3A::from_array([0, 1, 2].map(|k| self.planes[k][side][half][lane])));
+        (!min.cmpgt(max).any()).then_some([min, max])
+    }
+}
+
 /// A child to visit: an inner node (`prim_count == 0`) or a leaf's slots.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ChildRef {
@@ -102,11 +113,10 @@ impl WideBvh {
         while let Some(index) = stack.pop() {
             let node = &self.nodes[index as usize];
             for slot in 0..8 {
-                let (half, lane) = (slot / 4, slot % 4);
-                let [min, max] = [0, 1].map(|side| {
-                    Vec3A::from_array([0, 1, 2].map(|k| node.planes[k][side][half][lane]))
-                });
-                if min.cmpgt(max).any() || !may_meet(min, max) {
+                if !node
+                    .child_box(slot)
+                    .is_some_and(|[min, max]| may_meet(min, max))
+                {
                     continue;
                 }
                 let child = node.child[slot];
@@ -171,13 +181,9 @@ mod tests {
         while let Some((index, outer)) = stack.pop() {
             let node = &bvh.nodes[index];
             for slot in 0..8 {
-                let (half, lane) = (slot / 4, slot % 4);
-                let [min, max] = [0, 1].map(|side| {
-                    Vec3A::from_array([0, 1, 2].map(|k| node.planes[k][side][half][lane]))
-                });
-                if min.cmpgt(max).any() {
+                let Some([min, max]) = node.child_box(slot) else {
                     continue;
-                }
+                };
                 assert!(outer.min.cmple(min).all() && max.cmple(outer.max).all());
                 let child = node.child[slot] as usize;
                 match node.prim_count[slot] {

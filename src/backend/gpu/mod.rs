@@ -77,18 +77,23 @@ impl GpuBackend {
         &mut self,
         world: &crate::accel::World,
     ) -> Result<(&GpuContext, &RayQueries, &GpuScene), GpuError> {
-        self.upload(world)?;
-        let scene = self.scene.as_ref().expect("uploaded above");
+        let scene = Self::upload(&mut self.scene, &self.context, world)?;
         Ok((&self.context, &self.queries, scene))
     }
 
-    fn upload(&mut self, world: &crate::accel::World) -> Result<(), GpuError> {
-        match &mut self.scene {
-            Some(scene) => scene.update(&self.context, world),
-            None => {
-                self.scene = Some(GpuScene::upload(&self.context, world)?);
-                Ok(())
+    /// Brings `scene` up to `world` (see [`GpuScene::update`]), uploading
+    /// it whole the first time.
+    fn upload<'s>(
+        scene: &'s mut Option<GpuScene>,
+        context: &GpuContext,
+        world: &crate::accel::World,
+    ) -> Result<&'s GpuScene, GpuError> {
+        match scene {
+            Some(scene) => {
+                scene.update(context, world)?;
+                Ok(scene)
             }
+            None => Ok(scene.insert(GpuScene::upload(context, world)?)),
         }
     }
 
@@ -102,13 +107,13 @@ impl GpuBackend {
         stats: &mut FrameStats,
     ) -> Result<Image, RenderError> {
         let start = Instant::now();
-        self.upload(job.world)?;
+        let scene = Self::upload(&mut self.scene, &self.context, job.world)?;
         stats.add_stage_time("upload", start.elapsed().as_secs_f64());
         let frame = Frame {
             job,
             context: &self.context,
             queries: &self.queries,
-            scene: self.scene.as_ref().expect("uploaded above"),
+            scene,
             lanes: LightLanes::new(&job.frame.lights),
         };
         let shading = match shading {

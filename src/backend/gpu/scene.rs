@@ -112,14 +112,16 @@ impl GpuScene {
     }
 }
 
-fn upload_static(context: &GpuContext, flat: &FlatStatic) -> Result<StaticBuffers, GpuError> {
-    if flat.depth > WIDE_DEPTH_LIMIT {
-        return Err(GpuError::TooDeep {
-            what: "the static BVH",
-            depth: flat.depth,
-            limit: WIDE_DEPTH_LIMIT,
-        });
+/// Fails when a tree is deeper than the shader's stack for it holds.
+fn check_depth(what: &'static str, depth: usize, limit: usize) -> Result<(), GpuError> {
+    if depth > limit {
+        return Err(GpuError::TooDeep { what, depth, limit });
     }
+    Ok(())
+}
+
+fn upload_static(context: &GpuContext, flat: &FlatStatic) -> Result<StaticBuffers, GpuError> {
+    check_depth("the static BVH", flat.depth, WIDE_DEPTH_LIMIT)?;
     Ok(StaticBuffers {
         nodes: storage(context, "static BVH nodes", &flat.nodes)?,
         vertices: storage(context, "static triangles", &flat.triangles.vertices)?,
@@ -129,13 +131,7 @@ fn upload_static(context: &GpuContext, flat: &FlatStatic) -> Result<StaticBuffer
 }
 
 fn upload_dynamic(context: &GpuContext, flat: &FlatDynamic) -> Result<DynamicBuffers, GpuError> {
-    if flat.depth > BINARY_DEPTH_LIMIT {
-        return Err(GpuError::TooDeep {
-            what: "a dynamic object's BVH",
-            depth: flat.depth,
-            limit: BINARY_DEPTH_LIMIT,
-        });
-    }
+    check_depth("a dynamic object's BVH", flat.depth, BINARY_DEPTH_LIMIT)?;
     let FlatTriangles { vertices, sources } = &flat.triangles;
     let mut ids: Vec<u32> = bytemuck::cast_slice(sources).to_vec();
     let top_members_offset = ids.len() as u32;
