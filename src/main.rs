@@ -152,6 +152,7 @@ impl From<anyhow::Error> for Failure {
 }
 
 fn main() -> ExitCode {
+    quiet_headless_vulkan();
     let cli = Cli::parse();
     let outcome = match (&cli.command, &cli.render) {
         (Some(Command::Inspect(args)), _) => {
@@ -171,6 +172,19 @@ fn main() -> ExitCode {
             eprintln!("lmanim: error: {}", one_line(&failure.error));
             ExitCode::from(if failure.bad_input { 2 } else { 1 })
         }
+    }
+}
+
+/// On a machine without a desktop session (no `XDG_RUNTIME_DIR`: a farm
+/// node, a container, CI), Mesa's Vulkan device-select layer asks
+/// libwayland for a display, and libwayland prints an error line each
+/// time. wgpu chooses the adapter itself, so the layer is switched off
+/// there (`NODEVICE_SELECT`, Mesa's own switch), unless the user set it.
+/// This runs first, while the process has one thread.
+fn quiet_headless_vulkan() {
+    let headless = std::env::var_os("XDG_RUNTIME_DIR").is_none();
+    if headless && std::env::var_os("NODEVICE_SELECT").is_none() {
+        std::env::set_var("NODEVICE_SELECT", "1");
     }
 }
 

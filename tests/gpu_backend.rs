@@ -1,8 +1,11 @@
 //! The GPU backend against the CPU's: ray by ray on adversarial sets (rays
 //! through shared edges and vertices, axis-parallel rays, coordinates near
-//! 1e5 m, a wall 1 cm thick, a rotated dynamic instance), frame by frame on
-//! the sample scenes, the same bits twice, and the one-line error where no
-//! adapter exists.
+//! 1e5 m, a wall 1 cm thick, a rotated dynamic instance), formula (1) point
+//! by point at hard points (on edges and vertices, lights on surfaces and
+//! in their planes, every kind of light and lobe), frame by frame on the
+//! sample scenes and a textured model, the same bits twice, a silent
+//! headless run, work the device refuses as an error, and the one-line
+//! error where no adapter exists.
 //!
 //! These run on whatever adapter wgpu finds: lavapipe (software Vulkan,
 //! Debian's mesa-vulkan-drivers) in CI. Without one a test says so and
@@ -13,10 +16,17 @@ mod common;
 
 use std::path::Path;
 
-use glam::{Affine3A, Quat, Vec3};
+use glam::{Affine3A, DMat4, DQuat, DVec3, Quat, Vec3};
 use lmanim::accel::{Hit, Ray, World, WorldObject};
+use lmanim::backend::gpu::{FrameLights, GpuError};
 use lmanim::backend::GpuBackend;
 use lmanim::output::{read_exr, Image};
+use lmanim::render::light::RenderLight;
+use lmanim::render::material::SurfaceMaterial;
+use lmanim::render::omega::LightLanes;
+use lmanim::render::surface::ShadingPoint;
+use lmanim::render::whitted;
+use lmanim::scene::{Light, LightKind};
 
 use anim_support::lmanim;
 use common::cube;
@@ -82,12 +92,17 @@ fn axis_parallel_rays(centre: Vec3, half: f32) -> Vec<Ray> {
 /// triangle at the same `t` and barycentrics (to the bit, where the adapter
 /// has f64) and the same any-hit answer.
 fn assert_same_answers(gpu: &mut GpuBackend, world: &World, rays: &[Ray]) {
-    let (context, queries, scene) = gpu.queries_for(world).expect("upload");
+    let passes = gpu.passes_for(world).expect("upload");
+    let (context, scene) = (passes.context, passes.scene);
     let exact = context.exact;
-    let closest = queries
+    let closest = passes
+        .queries
         .closest_hits(context, scene, world, rays)
         .expect("closest hits");
-    let occluded = queries.occluded(context, scene, rays).expect("any hit");
+    let occluded = passes
+        .queries
+        .occluded(context, scene, rays)
+        .expect("any hit");
     let mut hits = 0;
     for ((ray, gpu_hit), gpu_blocked) in rays.iter().zip(&closest).zip(&occluded) {
         let cpu_hit: Option<Hit> = world.closest_hit(ray);
@@ -110,20 +125,19 @@ fn assert_same_answers(gpu: &mut GpuBackend, world: &World, rays: &[Ray]) {
     assert!(hits > rays.len() / 4, "too few rays hit: {hits}");
 }
 
-#[test]
-fn rays_reach_the_same_triangles_as_on_the_cpu() {
-    let Some(mut gpu) = gpu() else { return };
-    let (positions, triangles) = cube(6);
+/// Where the test cube goes, and whether it is dynamic: at the origin,
+/// near 1e5 m, rotated as a dynamic instance, and squashed into a static
+/// wall 1 cm thick.
+fn hard_placements() -> [(Affine3A, bool); 4] {
     let far = Vec3::new(1.0e5, -2.0e4, 1.0e5);
     let spin = Quat::from_axis_angle(Vec3::new(1.0, 2.0, 3.0).normalize(), 0.7);
-    let placements = [
+    [
         (Affine3A::IDENTITY, false),
         (Affine3A::from_translation(far), false),
         (
             Affine3A::from_rotation_translation(spin, Vec3::new(5.0, 0.0, 0.0)),
             true,
         ),
-        // A wall 1 cm thick, static.
         (
             Affine3A::from_scale_rotation_translation(
                 Vec3::new(2.0, 2.0, 0.005),
@@ -132,17 +146,29 @@ fn rays_reach_the_same_triangles_as_on_the_cpu() {
             ),
             false,
         ),
-    ];
+    ]
+}
+
+/// The world of the test cube at each of `placements`.
+fn world_of(positions: &[Vec3], triangles: &[[u32; 3]], placements: &[(Affine3A, bool)]) -> World {
     let objects: Vec<WorldObject> = placements
         .iter()
         .map(|&(to_render, dynamic)| WorldObject {
-            positions: &positions,
-            triangles: &triangles,
+            positions,
+            triangles,
             to_render,
             dynamic,
         })
         .collect();
-    let world = World::build(&objects);
+    World::build(&objects)
+}
+
+#[test]
+fn rays_reach_the_same_triangles_as_on_the_cpu() {
+    let Some(mut gpu) = gpu() else { return };
+    let (positions, triangles) = cube(6);
+    let placements = hard_placements();
+    let world = world_of(&positions, &triangles, &placements);
     let mut rays = Vec::new();
     for &(to_render, _) in &placements {
         let inside = [Vec3::ZERO, Vec3::new(0.3, -0.2, 0.1)].map(|p| to_render.transform_point3(p));
@@ -170,6 +196,187 @@ fn rays_reach_the_same_triangles_as_on_the_cpu() {
     assert_same_answers(&mut gpu, &world, &rays);
 }
 
+/// Lights of every kind around a cube centred at `centre`: near and far,
+/// with and without range (points beyond it), spots with smooth and hard
+/// cones aimed at it and away, directional ones, one lying on a face and
+/// one in the plane of the top face (grazing every point there).
+fn lights_around(centre: Vec3) -> Vec<RenderLight> {
+    let light = |kind, intensity: f32, range| Light {
+        name: None,
+        kind,
+        color: Vec3::new(1.0, 0.7, 0.4),
+        intensity,
+        range,
+        radius: None,
+    };
+    let centre = centre.as_dvec3();
+    // Spots and directional lights shine down −Z of their node.
+    let aimed = |at: DVec3, towards: DVec3| {
+        let rotation = DQuat::from_rotation_arc(DVec3::NEG_Z, (towards - at).normalize());
+        DMat4::from_rotation_translation(rotation, at)
+    };
+    let spot = |inner_cone, outer_cone| LightKind::Spot {
+        inner_cone,
+        outer_cone,
+    };
+    let placed = [
+        (
+            light(LightKind::Point, 40.0, None),
+            DMat4::from_translation(centre + DVec3::new(0.0, 3.0, 0.0)),
+        ),
+        (
+            light(LightKind::Point, 30.0, Some(2.5)),
+            DMat4::from_translation(centre + DVec3::new(2.0, 0.5, 1.0)),
+        ),
+        (
+            light(spot(0.2, 0.5), 60.0, None),
+            aimed(centre + DVec3::new(0.0, 0.5, 4.0), centre),
+        ),
+        (
+            light(spot(0.4, 0.4), 60.0, None),
+            aimed(centre + DVec3::new(3.0, 3.0, 0.0), centre),
+        ),
+        (
+            light(spot(0.1, 0.3), 60.0, None),
+            aimed(
+                centre + DVec3::new(-3.0, 2.0, 0.0),
+                centre - DVec3::new(6.0, 0.0, 0.0),
+            ),
+        ),
+        (
+            light(LightKind::Directional, 2.0, None),
+            aimed(centre, centre + DVec3::new(-1.0, -2.0, -0.5)),
+        ),
+        (
+            light(LightKind::Point, 10.0, None),
+            DMat4::from_translation(centre + DVec3::new(1.0, 0.25, 0.5)),
+        ),
+        (
+            light(LightKind::Point, 10.0, None),
+            DMat4::from_translation(centre + DVec3::new(4.0, 1.0, 0.0)),
+        ),
+        (
+            light(LightKind::Point, 20.0, Some(40.0)),
+            DMat4::from_translation(centre + DVec3::new(0.3, -3.0, 0.2)),
+        ),
+    ];
+    placed
+        .iter()
+        .map(|(light, node)| RenderLight::place(light, *node, DVec3::ZERO, 0.0))
+        .collect()
+}
+
+/// A shading point on the cube at `position` with outward normal `normal`,
+/// seen from `eye`; the shading normal leans by `lean`.
+fn point_at(
+    position: Vec3,
+    normal: Vec3,
+    eye: Vec3,
+    lean: Vec3,
+    material: SurfaceMaterial,
+) -> ShadingPoint {
+    let leaned = (normal + lean).normalize();
+    ShadingPoint {
+        sample: 0,
+        weight: Vec3::ONE,
+        depth: 0,
+        position,
+        geometric_normal: normal,
+        shading_normal: if leaned.dot(normal) > 0.0 {
+            leaned
+        } else {
+            normal
+        },
+        front_face: true,
+        view: (eye - position).normalize(),
+        material,
+    }
+}
+
+#[test]
+fn formula_one_on_the_gpu_gives_the_cpus_light_at_hard_points() {
+    let Some(mut gpu) = gpu() else { return };
+    let (positions, triangles) = cube(4);
+    let placements = hard_placements();
+    let world = world_of(&positions, &triangles, &placements);
+    let lights: Vec<RenderLight> = placements
+        .iter()
+        .flat_map(|(to_render, _)| lights_around(to_render.translation.into()))
+        .collect();
+    assert!(
+        lights.len() > 32,
+        "the lights span more than one group of 32"
+    );
+    let material = |metallic, roughness, specular, transmission| SurfaceMaterial {
+        base_color: Vec3::new(0.8, 0.6, 0.4),
+        metallic,
+        roughness,
+        specular,
+        transmission,
+        ior: 1.5,
+        emissive: Vec3::ZERO,
+    };
+    let materials = [
+        material(0.0, 1.0, 0.0, 0.0),
+        material(0.0, 0.5, 1.0, 0.0),
+        material(1.0, 0.05, 1.0, 0.0),
+        material(0.4, 0.3, 1.0, 0.5),
+    ];
+    // Points on every triangle's corners (shared vertices), edge midpoints
+    // (shared edges) and centre, each seen from in front and from behind
+    // the surface, with and without a leaning shading normal.
+    let mut points = Vec::new();
+    for (to_render, _) in &placements {
+        let eye = to_render.transform_point3(Vec3::new(4.0, 5.0, 6.0));
+        for (t, triangle) in triangles.iter().enumerate() {
+            let [a, b, c] = triangle.map(|i| to_render.transform_point3(positions[i as usize]));
+            let normal = (b - a).cross(c - a).normalize();
+            let material = materials[t % materials.len()];
+            for p in [a, (a + b) * 0.5, (a + b + c) / 3.0] {
+                points.push(point_at(p, normal, eye, Vec3::ZERO, material));
+                points.push(point_at(
+                    p,
+                    normal,
+                    eye,
+                    Vec3::new(0.3, -0.2, 0.1),
+                    material,
+                ));
+            }
+        }
+    }
+
+    let passes = gpu.passes_for(&world).expect("upload");
+    let frame_lights = FrameLights::upload(passes.context, &lights).expect("lights");
+    let (gpu_light, gpu_rays) = passes
+        .direct
+        .run(passes.context, passes.scene, &frame_lights, &points)
+        .expect("direct light");
+    let lanes = LightLanes::new(&lights);
+    let (mut cpu_rays, mut lit, mut shadowed) = (0, 0, 0);
+    for (point, gpu_value) in points.iter().zip(&gpu_light) {
+        let (cpu_value, rays) = whitted::direct_light(point, &lanes, &world);
+        cpu_rays += rays;
+        lit += (cpu_value != Vec3::ZERO) as usize;
+        shadowed += (rays > 0 && cpu_value == Vec3::ZERO) as usize;
+        if passes.context.exact {
+            assert_eq!(*gpu_value, cpu_value, "{point:?}");
+        } else {
+            let error = (*gpu_value - cpu_value).abs().max_element();
+            assert!(
+                error <= 1e-4 * cpu_value.max_element().max(1e-6),
+                "{point:?}: {gpu_value} against {cpu_value}"
+            );
+        }
+    }
+    assert_eq!(gpu_rays, cpu_rays);
+    assert!(
+        lit > points.len() / 4,
+        "too few points lit: {lit} of {}",
+        points.len()
+    );
+    assert!(shadowed > 0, "no point is in full shadow");
+}
+
 /// Renders `scene` in `dir` on `backend` with `args`; the frames' paths.
 fn render(dir: &Path, scene: &Path, backend: &str, frames: &str, args: &[&str]) -> Vec<Image> {
     let out = dir.join(format!("{backend}.####.exr"));
@@ -188,12 +395,17 @@ fn render(dir: &Path, scene: &Path, backend: &str, frames: &str, args: &[&str]) 
         "--quiet",
     ];
     all.extend(args);
-    let run = lmanim(&all, dir);
-    assert!(
-        run.status.success(),
-        "{backend}: {}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    // As on a farm node or in a container: no desktop session. A quiet
+    // run prints nothing there either (no Vulkan layer's complaint).
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_lmanim"))
+        .args(&all)
+        .current_dir(dir)
+        .env_remove("XDG_RUNTIME_DIR")
+        .output()
+        .expect("run lmanim");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{backend}: {stderr}");
+    assert!(stderr.is_empty(), "{backend} --quiet printed: {stderr}");
     let frames: Vec<String> = std::fs::read_dir(dir)
         .expect("dir")
         .filter_map(|e| e.ok()?.file_name().into_string().ok())
@@ -225,9 +437,9 @@ fn agreeing_share(a: &Image, b: &Image) -> f64 {
 fn assert_backends_agree(scene: &Path, frames: &str, args: &[&str]) {
     let Some(mut gpu) = gpu() else { return };
     let exact = gpu
-        .queries_for(&World::build(&[]))
+        .passes_for(&World::build(&[]))
         .expect("context")
-        .0
+        .context
         .exact;
     let dir = tempfile::tempdir().expect("tempdir");
     let cpu_frames = render(dir.path(), scene, "cpu", frames, args);
@@ -274,6 +486,81 @@ fn skinned_and_morphing_animations_match_the_cpu() {
     let args = ["--method", "whitted", "--width", "48", "--height", "32"];
     assert_backends_agree(&anim_support::skinned(dir.path()), "0..4", &args);
     assert_backends_agree(&anim_support::morph(dir.path()), "0..4", &args);
+}
+
+/// The courtyard with textures: a checker as the base colour of stone,
+/// plaster and wood (nearest and linear filtering, repeat and mirrored
+/// repeat), and as the emission of the blue paint.
+fn textured_courtyard(dir: &Path) -> std::path::PathBuf {
+    let checker = image::RgbaImage::from_fn(8, 8, |x, y| {
+        if (x + y) % 2 == 0 {
+            image::Rgba([230, 200, 120, 255])
+        } else {
+            image::Rgba([40, 90, 160, 255])
+        }
+    });
+    checker.save(dir.join("checker.png")).expect("write PNG");
+    let mut doc: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(sample("courtyard.gltf")).expect("read"))
+            .expect("JSON");
+    doc["images"] = serde_json::json!([{ "uri": "checker.png" }]);
+    doc["samplers"] = serde_json::json!([
+        { "magFilter": 9728, "minFilter": 9728, "wrapS": 10497, "wrapT": 10497 },
+        { "magFilter": 9729, "minFilter": 9729, "wrapS": 33648, "wrapT": 33648 },
+    ]);
+    doc["textures"] =
+        serde_json::json!([{ "source": 0, "sampler": 0 }, { "source": 0, "sampler": 1 }]);
+    let materials = doc["materials"].as_array_mut().expect("materials");
+    for (index, material) in materials.iter_mut().enumerate() {
+        match material["name"].as_str() {
+            Some("Stone" | "Plaster" | "Wood") => {
+                material["pbrMetallicRoughness"]["baseColorTexture"] =
+                    serde_json::json!({ "index": index % 2 });
+            }
+            Some("BluePaint") => {
+                material["emissiveTexture"] = serde_json::json!({ "index": 1 });
+                material["emissiveFactor"] = serde_json::json!([0.5, 0.5, 0.5]);
+            }
+            _ => {}
+        }
+    }
+    let path = dir.join("textured.gltf");
+    std::fs::write(&path, doc.to_string()).expect("write");
+    path
+}
+
+#[test]
+fn a_textured_model_matches_the_cpu() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = textured_courtyard(dir.path());
+    let args = ["--method", "whitted", "--width", "64", "--height", "36"];
+    assert_backends_agree(&scene, "0", &args);
+}
+
+/// Work the device refuses (here a buffer beyond its limit) is an error
+/// naming what failed, not wgpu's panic.
+#[test]
+fn work_the_device_refuses_is_an_error() {
+    let Some(mut gpu) = gpu() else { return };
+    let passes = gpu.passes_for(&World::build(&[])).expect("upload");
+    let context = passes.context;
+    let too_large = context.limits.max_buffer_size + 4;
+    let refused = context.checked("a test buffer", || {
+        Ok(context.device.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size: too_large,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        }))
+    });
+    match refused {
+        Err(error @ GpuError::Refused { .. }) => {
+            let message = error.to_string();
+            assert!(message.contains("a test buffer"), "{message}");
+            assert!(!message.contains('\n'), "{message}");
+        }
+        other => panic!("expected a refusal, got {other:?}"),
+    }
 }
 
 #[test]

@@ -26,23 +26,24 @@ pub fn evaluate(material: &SurfaceMaterial, n: Vec3, v: Vec3, l: Vec3) -> Vec3 {
 
 /// The BRDF at one shading point, with everything that does not depend on
 /// the light computed once: formulas (1) and (2) evaluate it for every
-/// light that reaches the point, dozens in a street of lamps.
+/// light that reaches the point, dozens in a street of lamps. The GPU's
+/// direct-light pass uploads its fields and evaluates it there.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PointBrdf {
-    n: Vec3,
-    v: Vec3,
-    n_dot_v: f32,
+    pub(crate) n: Vec3,
+    pub(crate) v: Vec3,
+    pub(crate) n_dot_v: f32,
     /// α² of the GGX lobe (α = roughness²).
-    alpha2: f32,
+    pub(crate) alpha2: f32,
     /// The view half of the height-correlated Smith term,
     /// `sqrt((n·v)² (1 − α²) + α²)`.
-    view_smith: f32,
+    pub(crate) view_smith: f32,
     /// Lambert's lobe, less what transmission takes.
-    diffuse: Vec3,
-    base_color: Vec3,
-    metallic: f32,
-    specular: f32,
-    dielectric_f0: f32,
+    pub(crate) diffuse: Vec3,
+    pub(crate) base_color: Vec3,
+    pub(crate) metallic: f32,
+    pub(crate) specular: f32,
+    pub(crate) dielectric_f0: f32,
 }
 
 impl PointBrdf {

@@ -32,22 +32,15 @@ pub struct LightLanes {
     blocks: Vec<LightBlock>,
 }
 
+/// The fields of [`OmegaLight`] for eight lights, a lane each.
 #[derive(Clone, Copy, Debug)]
 struct LightBlock {
-    /// Position of point and spot lights; unit direction towards a
-    /// directional light.
     origin: Lanes3,
     /// All bits set in directional lanes.
     directional: f32x8,
-    /// Colour × intensity.
     power: Lanes3,
-    /// range², infinite where the light has none.
     range_squared: f32x8,
-    /// The spot's unit axis (zero for other lights: every direction is at
-    /// cos 0 from it, inside the open cone below).
     axis: Lanes3,
-    /// cos of the outer and inner cone angles: −2 and −1 where there is no
-    /// cone, so the smooth ramp gives exactly 1.
     cos_outer: f32x8,
     cos_inner: f32x8,
 }
@@ -57,47 +50,23 @@ impl LightLanes {
         let blocks = lights
             .chunks(LANES)
             .map(|chunk| {
-                let lane = |value: &dyn Fn(&RenderLight) -> f32, padding: f32| {
-                    let mut lanes = [padding; LANES];
-                    for (slot, light) in lanes.iter_mut().zip(chunk) {
-                        *slot = value(light);
-                    }
-                    f32x8::new(lanes)
-                };
-                let lane3 = |value: &dyn Fn(&RenderLight) -> Vec3| {
-                    [0, 1, 2].map(|axis| lane(&|light| value(light)[axis], 0.0))
-                };
-                let origin = |light: &RenderLight| match light.source {
-                    LightSource::Point { position } | LightSource::Spot { position, .. } => {
-                        position
-                    }
-                    LightSource::Directional { towards } => towards,
-                };
-                let is_directional =
-                    |light: &RenderLight| matches!(light.source, LightSource::Directional { .. });
-                let spot = |light: &RenderLight| match light.source {
-                    LightSource::Spot {
-                        axis,
-                        cos_outer,
-                        cos_inner,
-                        ..
-                    } => (axis, cos_outer, cos_inner),
-                    _ => (Vec3::ZERO, -2.0, -1.0),
+                let mut lanes = [OmegaLight::PADDING; LANES];
+                for (lane, light) in lanes.iter_mut().zip(chunk) {
+                    *lane = OmegaLight::from(light);
+                }
+                let lane =
+                    |value: &dyn Fn(&OmegaLight) -> f32| f32x8::new(lanes.map(|l| value(&l)));
+                let lane3 = |value: &dyn Fn(&OmegaLight) -> Vec3| {
+                    [0, 1, 2].map(|axis| lane(&|light| value(light)[axis]))
                 };
                 LightBlock {
-                    origin: lane3(&origin),
-                    directional: lane(&|light| all_bits(is_directional(light)), 0.0),
+                    origin: lane3(&|light| light.origin),
+                    directional: lane(&|light| all_bits(light.directional)),
                     power: lane3(&|light| light.power),
-                    range_squared: lane(
-                        &|light| match (light.range, is_directional(light)) {
-                            (Some(range), false) => range * range,
-                            _ => f32::INFINITY,
-                        },
-                        f32::INFINITY,
-                    ),
-                    axis: lane3(&|light| spot(light).0),
-                    cos_outer: lane(&|light| spot(light).1, -2.0),
-                    cos_inner: lane(&|light| spot(light).2, -1.0),
+                    range_squared: lane(&|light| light.range_squared),
+                    axis: lane3(&|light| light.axis),
+                    cos_outer: lane(&|light| light.cos_outer),
+                    cos_inner: lane(&|light| light.cos_inner),
                 }
             })
             .collect();
@@ -190,6 +159,75 @@ impl LightLanes {
             irradiance,
             cos_theta,
             reaches,
+        }
+    }
+}
+
+/// One light as Omega's arithmetic takes it, one lane's worth of a
+/// [`LightBlock`]: every kind of light in the same fields, so the same
+/// operations serve all of them (and the GPU's direct-light pass, which
+/// uploads these).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OmegaLight {
+    /// Position of a point or spot light; unit direction towards a
+    /// directional one.
+    pub origin: Vec3,
+    pub directional: bool,
+    /// Colour × intensity.
+    pub power: Vec3,
+    /// range², infinite where the light has none (and for directional
+    /// lights).
+    pub range_squared: f32,
+    /// The spot's unit axis; zero for other lights, so every direction is
+    /// at cos 0 from it, inside the open cone below.
+    pub axis: Vec3,
+    /// cos of the outer and inner cone angles: −2 and −1 where there is no
+    /// cone, so the smooth ramp gives exactly 1.
+    pub cos_outer: f32,
+    pub cos_inner: f32,
+}
+
+impl OmegaLight {
+    /// What fills the lanes of a block past the last light: no power.
+    pub const PADDING: OmegaLight = OmegaLight {
+        origin: Vec3::ZERO,
+        directional: false,
+        power: Vec3::ZERO,
+        range_squared: f32::INFINITY,
+        axis: Vec3::ZERO,
+        cos_outer: -2.0,
+        cos_inner: -1.0,
+    };
+}
+
+impl From<&RenderLight> for OmegaLight {
+    fn from(light: &RenderLight) -> OmegaLight {
+        let open = OmegaLight::PADDING;
+        let positional = |position: Vec3| OmegaLight {
+            origin: position,
+            power: light.power,
+            range_squared: light.range.map_or(f32::INFINITY, |range| range * range),
+            ..open
+        };
+        match light.source {
+            LightSource::Point { position } => positional(position),
+            LightSource::Spot {
+                position,
+                axis,
+                cos_outer,
+                cos_inner,
+            } => OmegaLight {
+                axis,
+                cos_outer,
+                cos_inner,
+                ..positional(position)
+            },
+            LightSource::Directional { towards } => OmegaLight {
+                origin: towards,
+                directional: true,
+                power: light.power,
+                ..open
+            },
         }
     }
 }

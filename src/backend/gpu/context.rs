@@ -3,9 +3,9 @@
 
 use std::fmt;
 
-/// Storage buffers one ray query binds (rays, output, and seven arrays of
-/// the flat world).
-pub const STORAGE_BUFFERS: u32 = 9;
+/// Storage buffers one pass binds at most: its items and answers, seven
+/// arrays of the flat world, and the lights of the direct-light pass.
+pub const STORAGE_BUFFERS: u32 = 10;
 
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
@@ -16,7 +16,7 @@ pub enum GpuError {
     NoAdapter,
     #[error("--backend gpu: the adapter '{adapter}' refused a device: {reason}")]
     Device { adapter: String, reason: String },
-    #[error("--backend gpu: the adapter '{adapter}' binds {limit} storage buffers per shader, the ray queries need {STORAGE_BUFFERS}")]
+    #[error("--backend gpu: the adapter '{adapter}' binds {limit} storage buffers per shader, the GPU passes need {STORAGE_BUFFERS}")]
     TooFewBuffers { adapter: String, limit: u32 },
     #[error("--backend gpu: {what} takes {bytes} bytes, more than the {limit} bytes the adapter '{adapter}' binds at once")]
     TooLarge {
@@ -35,6 +35,14 @@ pub enum GpuError {
     LightMeshOnGpu,
     #[error("--backend gpu: reading results back failed: {0}")]
     Readback(String),
+    /// The device refused work (out of memory, or a limit the checks
+    /// before it missed).
+    #[error("--backend gpu: the adapter '{adapter}' failed {what}: {reason}")]
+    Refused {
+        what: &'static str,
+        adapter: String,
+        reason: String,
+    },
 }
 
 /// The device, its queue, and what the shaders may count on.
@@ -107,6 +115,29 @@ impl GpuContext {
     /// timings say nothing of a GPU's.
     pub fn is_software(&self) -> bool {
         self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// Runs `work` (buffer creation, passes) with the device's errors
+    /// caught and returned as [`GpuError::Refused`] naming `what`: wgpu
+    /// would otherwise hand them to its default handler, which panics.
+    pub fn checked<T>(
+        &self,
+        what: &'static str,
+        work: impl FnOnce() -> Result<T, GpuError>,
+    ) -> Result<T, GpuError> {
+        let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let done = work();
+        let invalid = pollster::block_on(validation.pop());
+        let exhausted = pollster::block_on(memory.pop());
+        match invalid.or(exhausted) {
+            Some(error) => Err(GpuError::Refused {
+                what,
+                adapter: self.info.name.clone(),
+                reason: error.to_string().replace('\n', " "),
+            }),
+            None => done,
+        }
     }
 
     /// Fails with the adapter's limit when `bytes` cannot be bound at once.

@@ -1,17 +1,21 @@
 //! The GPU backend (wgpu): the frame's stages as the CPU backend runs
-//! them, with every ray query as a compute pass over the uploaded world
-//! ([`trace`]): primary hits for the camera's samples, the Whitted
-//! recursion level by level, and the shadow segments of formula (1) and of
+//! them, with the ray tracing as compute passes over the uploaded world:
+//! closest hits for the camera's samples and the Whitted recursion level
+//! by level ([`trace`]), formula (1) whole — Omega, shadow segments and
+//! their sum — in one pass ([`direct`]), and the shadow segments of
 //! `--method area`. Making rays, completing hits into shading points,
-//! Omega and resolve stay the CPU's code on the CPU's threads, so a frame
-//! differs from the CPU backend's only where a query answers differently,
-//! and tests compare exactly that, ray by ray.
+//! sampling lamps and resolve stay the CPU's code on the CPU's threads.
+//! The passes round as the CPU does, so a frame differs from the CPU
+//! backend's only where a query answers differently, and tests compare
+//! exactly that, ray by ray and frame by frame.
 //!
-//! Stages wait for their query's answers (a readback per batch of rays):
-//! the point is equal frames first. Moving shading into WGSL as well is
-//! what a real GPU needs for speed (see BENCHMARKS.md).
+//! Stages wait for their pass's answers (a readback per batch). Making
+//! shading points on the GPU too is what a real GPU needs next for speed
+//! (see BENCHMARKS.md).
 
 mod context;
+pub(crate) mod direct;
+mod pass;
 pub(crate) mod scene;
 mod shaders;
 pub(crate) mod trace;
@@ -22,6 +26,7 @@ use glam::{UVec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 pub use context::{GpuContext, GpuError};
+pub use direct::{DirectLightPass, FrameLights};
 pub use scene::GpuScene;
 pub use trace::RayQueries;
 
@@ -30,20 +35,20 @@ use super::sampling::{film_position, lamp_sample};
 use super::{thread_pool, BackendError, RenderError, Shading};
 use crate::accel::{Hit, Ray};
 use crate::output::Image;
-use crate::render::omega::LightLanes;
 use crate::render::scatter::secondary_rays;
 use crate::render::surface::ShadingPoint;
-use crate::render::{area, whitted, FrameJob};
+use crate::render::{area, FrameJob};
 use crate::stats::FrameStats;
 
-/// Points whose shadow segments go to the GPU together: at 64 lights, about
-/// a million segments.
+/// Points whose lamp samples go to the GPU together (`--method area`): at
+/// 64 lights, about a million segments.
 const SHADE_CHUNK: usize = 16384;
 
 pub struct GpuBackend {
     pool: rayon::ThreadPool,
     context: GpuContext,
     queries: RayQueries,
+    direct: DirectLightPass,
     /// The last world rendered, as uploaded.
     scene: Option<GpuScene>,
 }
@@ -54,10 +59,12 @@ impl GpuBackend {
     pub fn new(threads: Option<usize>) -> Result<GpuBackend, BackendError> {
         let context = GpuContext::new()?;
         let queries = RayQueries::new(&context);
+        let direct = DirectLightPass::new(&context);
         Ok(GpuBackend {
             pool: thread_pool(threads)?,
             context,
             queries,
+            direct,
             scene: None,
         })
     }
@@ -71,14 +78,16 @@ impl GpuBackend {
         self.context.to_string()
     }
 
-    /// The context and the world of `job` as uploaded, for ray queries
-    /// outside a frame (tests, benchmarks).
-    pub fn queries_for(
-        &mut self,
-        world: &crate::accel::World,
-    ) -> Result<(&GpuContext, &RayQueries, &GpuScene), GpuError> {
+    /// The passes and `world` as uploaded, for running them outside a
+    /// frame (tests, benchmarks).
+    pub fn passes_for(&mut self, world: &crate::accel::World) -> Result<GpuPasses<'_>, GpuError> {
         let scene = Self::upload(&mut self.scene, &self.context, world)?;
-        Ok((&self.context, &self.queries, scene))
+        Ok(GpuPasses {
+            context: &self.context,
+            queries: &self.queries,
+            direct: &self.direct,
+            scene,
+        })
     }
 
     /// Brings `scene` up to `world` (see [`GpuScene::update`]), uploading
@@ -108,13 +117,15 @@ impl GpuBackend {
     ) -> Result<Image, RenderError> {
         let start = Instant::now();
         let scene = Self::upload(&mut self.scene, &self.context, job.world)?;
+        let lights = FrameLights::upload(&self.context, &job.frame.lights)?;
         stats.add_stage_time("upload", start.elapsed().as_secs_f64());
         let frame = Frame {
             job,
             context: &self.context,
             queries: &self.queries,
+            direct: &self.direct,
             scene,
-            lanes: LightLanes::new(&job.frame.lights),
+            lights,
         };
         let shading = match shading {
             Shading::Whitted => DeferredShading::Whitted,
@@ -135,6 +146,14 @@ impl GpuBackend {
     }
 }
 
+/// The backend's passes over one uploaded world.
+pub struct GpuPasses<'a> {
+    pub context: &'a GpuContext,
+    pub queries: &'a RayQueries,
+    pub direct: &'a DirectLightPass,
+    pub scene: &'a GpuScene,
+}
+
 /// The direct-light methods whose shadow segments the GPU traces.
 #[derive(Clone, Copy)]
 enum DeferredShading {
@@ -147,8 +166,9 @@ struct Frame<'a> {
     job: &'a FrameJob<'a>,
     context: &'a GpuContext,
     queries: &'a RayQueries,
+    direct: &'a DirectLightPass,
     scene: &'a GpuScene,
-    lanes: LightLanes,
+    lights: FrameLights,
 }
 
 /// Where a ray's hit goes: the sample it belongs to, its path weight, its
@@ -267,48 +287,58 @@ impl Frame<'_> {
     }
 
     /// Every point's direct light by `shading`, and the shadow segments
-    /// traced: each point's terms are made on the CPU in light order, their
-    /// segments tested on the GPU, and the visible terms summed in that
-    /// order, so a point gets the CPU backend's bits wherever the segments
-    /// get its answers.
+    /// traced.
     fn direct_light(
         &self,
         points: &[ShadingPoint],
         shading: DeferredShading,
         band_start: u64,
     ) -> Result<(Vec<Vec3>, u64), GpuError> {
+        match shading {
+            DeferredShading::Whitted => {
+                self.direct
+                    .run(self.context, self.scene, &self.lights, points)
+            }
+            DeferredShading::Area => self.area_light(points, band_start),
+        }
+    }
+
+    /// `--method area`: each point's lamp samples are made on the CPU in
+    /// light order, their segments tested on the GPU, and the visible
+    /// samples summed in that order, so a point gets the CPU backend's
+    /// bits wherever the segments get its answers.
+    fn area_light(
+        &self,
+        points: &[ShadingPoint],
+        band_start: u64,
+    ) -> Result<(Vec<Vec3>, u64), GpuError> {
         let job = self.job;
         let mut direct = Vec::with_capacity(points.len());
         let mut shadow_rays = 0;
         for chunk in points.chunks(SHADE_CHUNK) {
-            let terms: Vec<PointTerms> = chunk
+            let samples: Vec<LampSamples> = chunk
                 .par_iter()
                 .map(|point| {
-                    let mut terms = PointTerms::default();
-                    match shading {
-                        DeferredShading::Whitted => {
-                            whitted::light_terms(point, &self.lanes, |value, ray| {
-                                terms.push(value, ray)
-                            })
-                        }
-                        DeferredShading::Area => {
-                            let sample = band_start + point.sample as u64;
-                            let lamp = |light| lamp_sample(sample, job.spp, light, point.depth);
-                            area::light_samples(point, &job.frame.lights, lamp, |s| {
-                                terms.push(s.value, s.shadow_ray)
-                            })
-                        }
-                    }
-                    terms
+                    let mut samples = LampSamples::default();
+                    let sample = band_start + point.sample as u64;
+                    let lamp = |light| lamp_sample(sample, job.spp, light, point.depth);
+                    area::light_samples(point, &job.frame.lights, lamp, |s| {
+                        samples.values.push(s.value);
+                        samples.rays.push(s.shadow_ray);
+                    });
+                    samples
                 })
                 .collect();
-            let rays: Vec<Ray> = terms.iter().flat_map(|t| t.rays.iter().copied()).collect();
+            let rays: Vec<Ray> = samples
+                .iter()
+                .flat_map(|s| s.rays.iter().copied())
+                .collect();
             shadow_rays += rays.len() as u64;
             let occluded = self.queries.occluded(self.context, self.scene, &rays)?;
             let mut answers = occluded.into_iter();
-            for point_terms in &terms {
+            for point_samples in &samples {
                 let mut radiance = Vec3::ZERO;
-                for (value, blocked) in point_terms.values.iter().zip(answers.by_ref()) {
+                for (value, blocked) in point_samples.values.iter().zip(answers.by_ref()) {
                     if !blocked {
                         radiance += *value;
                     }
@@ -320,16 +350,9 @@ impl Frame<'_> {
     }
 }
 
-/// One point's direct-light terms in light order, visibility aside.
+/// One point's lamp samples in light order, visibility aside.
 #[derive(Default)]
-struct PointTerms {
+struct LampSamples {
     values: Vec<Vec3>,
     rays: Vec<Ray>,
-}
-
-impl PointTerms {
-    fn push(&mut self, value: Vec3, ray: Ray) {
-        self.values.push(value);
-        self.rays.push(ray);
-    }
 }

@@ -16,18 +16,20 @@ const WIDE_DEPTH_LIMIT: usize = 13;
 /// Deepest binary tree the shader's stacks hold (`BINARY_STACK`).
 const BINARY_DEPTH_LIMIT: usize = 64;
 
-/// The uniform every ray query reads; `scene.wgsl`'s `Params`.
+/// The uniform every pass reads; `scene.wgsl`'s `Params`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct Params {
-    pub ray_count: u32,
+    /// Rays or points in the batch.
+    pub item_count: u32,
     pub static_node_count: u32,
     pub top_node_offset: u32,
     pub top_node_count: u32,
     pub top_members_offset: u32,
     pub binary_scale: f32,
     pub inv_limit: f32,
-    pub _pad: u32,
+    /// Lights of the direct-light pass.
+    pub light_count: u32,
 }
 
 struct StaticBuffers {
@@ -57,11 +59,13 @@ pub struct GpuScene {
 
 impl GpuScene {
     pub fn upload(context: &GpuContext, world: &World) -> Result<GpuScene, GpuError> {
-        Ok(GpuScene {
-            world: world.id(),
-            revision: world.dynamic_revision(),
-            static_part: upload_static(context, &world.flat_static())?,
-            dynamic_part: upload_dynamic(context, &world.flat_dynamic())?,
+        context.checked("uploading the scene", || {
+            Ok(GpuScene {
+                world: world.id(),
+                revision: world.dynamic_revision(),
+                static_part: upload_static(context, &world.flat_static())?,
+                dynamic_part: upload_dynamic(context, &world.flat_dynamic())?,
+            })
         })
     }
 
@@ -71,43 +75,43 @@ impl GpuScene {
         if world.id() != self.world {
             *self = GpuScene::upload(context, world)?;
         } else if world.dynamic_revision() != self.revision {
-            self.dynamic_part = upload_dynamic(context, &world.flat_dynamic())?;
+            self.dynamic_part = context.checked("uploading the moved objects", || {
+                upload_dynamic(context, &world.flat_dynamic())
+            })?;
             self.revision = world.dynamic_revision();
         }
         Ok(())
     }
 
-    /// The uniform for a batch of `ray_count` rays over this scene.
-    pub fn params(&self, ray_count: u32) -> Params {
+    /// The uniform for a batch of `item_count` items and `light_count`
+    /// lights over this scene.
+    pub fn params(&self, item_count: u32, light_count: u32) -> Params {
         Params {
-            ray_count,
+            item_count,
             static_node_count: self.static_part.node_count,
             top_node_offset: self.dynamic_part.top_offset,
             top_node_count: self.dynamic_part.top_count,
             top_members_offset: self.dynamic_part.top_members_offset,
             binary_scale: crate::accel::node_test::BINARY_SCALE,
             inv_limit: crate::accel::node_test::INV_LIMIT,
-            _pad: 0,
+            light_count,
         }
     }
 
-    /// Bindings 2 to 6, 8 and 9 of `scene.wgsl`.
-    pub fn entries(&self) -> [wgpu::BindGroupEntry<'_>; 7] {
-        fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-            wgpu::BindGroupEntry {
-                binding,
-                resource: buffer.as_entire_binding(),
-            }
-        }
+    /// The bindings of `scene.wgsl`'s arrays.
+    pub const BINDINGS: [u32; 7] = [2, 3, 4, 5, 6, 8, 9];
+
+    /// The world's buffers at their [`GpuScene::BINDINGS`].
+    pub fn buffers(&self) -> [(u32, &wgpu::Buffer); 7] {
         let (s, d) = (&self.static_part, &self.dynamic_part);
         [
-            entry(2, &s.nodes),
-            entry(3, &d.nodes),
-            entry(4, &s.vertices),
-            entry(5, &s.ids),
-            entry(6, &d.instances),
-            entry(8, &d.vertices),
-            entry(9, &d.ids),
+            (2, &s.nodes),
+            (3, &d.nodes),
+            (4, &s.vertices),
+            (5, &s.ids),
+            (6, &d.instances),
+            (8, &d.vertices),
+            (9, &d.ids),
         ]
     }
 }

@@ -1,28 +1,33 @@
-//! The WGSL of the ray queries, kept in `shaders/` as files of their own
+//! The WGSL of the compute passes, kept in `shaders/` as files of their own
 //! and put together here at build time: WGSL has no includes, so each
 //! entry point's module is the arithmetic prelude, the shared declarations
 //! and its own file, concatenated.
 
-/// How products and quotients round: through f64 where the adapter has it
-/// (as the CPU rounds), else plain f32.
+/// How products, quotients and roots round: through f64 where the adapter
+/// has it (as the CPU rounds), else plain f32.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Arithmetic {
     ExactF64,
     PlainF32,
 }
 
-/// The compute entry points.
+/// The compute entry points: the two ray queries and formula (1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Query {
+pub enum Entry {
     ClosestHit,
     AnyHit,
+    DirectLight,
 }
 
-impl Query {
-    pub fn entry_point(self) -> &'static str {
+impl Entry {
+    #[cfg(test)]
+    pub const ALL: [Entry; 3] = [Entry::ClosestHit, Entry::AnyHit, Entry::DirectLight];
+
+    pub fn name(self) -> &'static str {
         match self {
-            Query::ClosestHit => "closest_hit",
-            Query::AnyHit => "any_hit",
+            Entry::ClosestHit => "closest_hit",
+            Entry::AnyHit => "any_hit",
+            Entry::DirectLight => "direct_light",
         }
     }
 }
@@ -33,20 +38,22 @@ const SHARED: [&str; 3] = [
     include_str!("shaders/traverse.wgsl"),
 ];
 
-/// The whole module for `query` with `arithmetic`.
-pub fn source(query: Query, arithmetic: Arithmetic) -> String {
+/// The whole module for `entry` with `arithmetic`.
+pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
     let prelude = match arithmetic {
         Arithmetic::ExactF64 => include_str!("shaders/exact_f64.wgsl"),
         Arithmetic::PlainF32 => include_str!("shaders/exact_f32.wgsl"),
     };
-    let entry = match query {
-        Query::ClosestHit => include_str!("shaders/closest_hit.wgsl"),
-        Query::AnyHit => include_str!("shaders/occluded.wgsl"),
+    let rays = include_str!("shaders/rays.wgsl");
+    let own: &[&str] = match entry {
+        Entry::ClosestHit => &[rays, include_str!("shaders/closest_hit.wgsl")],
+        Entry::AnyHit => &[rays, include_str!("shaders/occluded.wgsl")],
+        Entry::DirectLight => &[include_str!("shaders/direct_light.wgsl")],
     };
     [prelude]
         .into_iter()
         .chain(SHARED)
-        .chain([entry])
+        .chain(own.iter().copied())
         .collect::<Vec<_>>()
         .join("\n")
 }
@@ -60,20 +67,17 @@ mod tests {
     /// `--backend gpu` run.
     #[test]
     fn every_module_validates() {
-        for query in [Query::ClosestHit, Query::AnyHit] {
+        for entry in Entry::ALL {
             for (arithmetic, capabilities) in [
                 (Arithmetic::ExactF64, naga::valid::Capabilities::FLOAT64),
                 (Arithmetic::PlainF32, naga::valid::Capabilities::empty()),
             ] {
-                let module = naga::front::wgsl::parse_str(&source(query, arithmetic))
-                    .unwrap_or_else(|e| panic!("{query:?} {arithmetic:?}: {e}"));
+                let module = naga::front::wgsl::parse_str(&source(entry, arithmetic))
+                    .unwrap_or_else(|e| panic!("{entry:?} {arithmetic:?}: {e}"));
                 naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
                     .validate(&module)
-                    .unwrap_or_else(|e| panic!("{query:?} {arithmetic:?}: {e:?}"));
-                assert!(module
-                    .entry_points
-                    .iter()
-                    .any(|e| e.name == query.entry_point()));
+                    .unwrap_or_else(|e| panic!("{entry:?} {arithmetic:?}: {e:?}"));
+                assert!(module.entry_points.iter().any(|e| e.name == entry.name()));
             }
         }
     }
@@ -84,12 +88,14 @@ mod tests {
     #[test]
     fn wgsl_structs_match_the_uploaded_records() {
         use crate::accel::flat::{FlatBinaryNode, FlatInstance, FlatWideNode};
+        use crate::backend::gpu::direct::{DirectLight, FlatLight, ShadePoint};
         use crate::backend::gpu::scene::Params;
         use crate::backend::gpu::trace::{GpuRay, HitRecord};
-        let module = naga::front::wgsl::parse_str(&source(Query::ClosestHit, Arithmetic::PlainF32))
+        let modules: Vec<naga::Module> = Entry::ALL
+            .iter()
+            .map(|&entry| naga::front::wgsl::parse_str(&source(entry, Arithmetic::PlainF32)))
+            .collect::<Result<_, _>>()
             .expect("parse");
-        let mut layouter = naga::proc::Layouter::default();
-        layouter.update(module.to_ctx()).expect("layout");
         let expected = [
             (
                 "Params",
@@ -113,13 +119,31 @@ mod tests {
             ),
             ("Ray", size_of::<GpuRay>(), vec![0, 12, 16, 28]),
             ("HitRecord", size_of::<HitRecord>(), vec![0, 4, 8, 12, 16]),
+            (
+                "ShadePoint",
+                size_of::<ShadePoint>(),
+                vec![0, 12, 16, 28, 32, 44, 48, 60, 64, 76, 80, 92],
+            ),
+            (
+                "Light",
+                size_of::<FlatLight>(),
+                vec![0, 12, 16, 28, 32, 44, 48, 52],
+            ),
+            ("DirectLight", size_of::<DirectLight>(), vec![0, 12]),
         ];
         for (name, size, offsets) in expected {
-            let (handle, ty) = module
-                .types
+            let (module, handle, ty) = modules
                 .iter()
-                .find(|(_, ty)| ty.name.as_deref() == Some(name))
+                .find_map(|module| {
+                    let (handle, ty) = module
+                        .types
+                        .iter()
+                        .find(|(_, ty)| ty.name.as_deref() == Some(name))?;
+                    Some((module, handle, ty))
+                })
                 .unwrap_or_else(|| panic!("no struct {name}"));
+            let mut layouter = naga::proc::Layouter::default();
+            layouter.update(module.to_ctx()).expect("layout");
             assert_eq!(layouter[handle].size as usize, size, "{name}");
             let naga::TypeInner::Struct { members, .. } = &ty.inner else {
                 panic!("{name} is not a struct");

@@ -20,3 +20,9 @@ fn div(a: f32, b: f32) -> f32 {
 fn difference_of_products(p: f32, q: f32, r: f32, s: f32) -> f32 {
     return f32(f64(p) * f64(q) - f64(r) * f64(s));
 }
+
+// The square root the CPU takes: rounding the f64 root to f32 gives the
+// correctly rounded f32 root (f64 has more than twice f32's precision).
+fn root(x: f32) -> f32 {
+    return f32(sqrt(f64(x)));
+}

@@ -7,7 +7,7 @@
 @compute @workgroup_size(64)
 fn any_hit(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
-    if index >= params.ray_count {
+    if index >= params.item_count {
         return;
     }
     let ray = rays[index];

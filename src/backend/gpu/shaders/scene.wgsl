@@ -1,10 +1,12 @@
-// The world in flat form (Rust side: `accel::flat`), bound once for every
-// ray query: the static wide BVH, the dynamic objects' binary BVHs and the
-// top level over them, triangle vertices and ids. Layouts are declared on
-// the Rust side as `Pod` structs; a test compares sizes and offsets.
+// The world in flat form (Rust side: `accel::flat`), bound for every pass:
+// the static wide BVH, the dynamic objects' binary BVHs and the top level
+// over them, triangle vertices and ids. Each pass declares its own items
+// (binding 1) and answers (binding 7). Layouts are declared on the Rust
+// side as `Pod` structs; a test compares sizes and offsets.
 
 struct Params {
-    ray_count: u32,
+    // Items of the pass: rays, or shading points.
+    item_count: u32,
     static_node_count: u32,
     top_node_offset: u32,
     top_node_count: u32,
@@ -13,7 +15,8 @@ struct Params {
     binary_scale: f32,
     // Stand-in for 1 / 0 and the largest inverse used.
     inv_limit: f32,
-    _pad: u32,
+    // Lights of the direct-light pass (0 in ray queries).
+    light_count: u32,
 }
 
 // Eight children: their boxes as planes[(axis * 2 + side) * 8 + child]
@@ -46,15 +49,7 @@ struct Instance {
     _pad: u32,
 }
 
-struct Ray {
-    origin: vec3<f32>,
-    t_max: f32,
-    direction: vec3<f32>,
-    _pad: f32,
-}
-
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> rays: array<Ray>;
 @group(0) @binding(2) var<storage, read> wide_nodes: array<WideNode>;
 @group(0) @binding(3) var<storage, read> binary_nodes: array<BinaryNode>;
 // Nine floats per triangle slot, in slot order: the static mesh's in

@@ -1,0 +1,164 @@
+//! Formula (1) on the GPU: each shading point's Omega for every light, its
+//! shadow segments and their sum, in one pass (`direct_light.wgsl`). The
+//! CPU makes the points and their BRDFs and uploads them; only a colour
+//! and a ray count per point come back, where the ray queries would move
+//! a segment and an answer per point and light.
+//!
+//! The shader repeats the CPU's eight-lane Omega operation for operation,
+//! rounding as the CPU does where the adapter has f64, so a point gets the
+//! CPU backend's bits wherever its segments get the CPU's answers (the GPU
+//! tests compare whole frames). Where the adapter has no f64, or flushes a
+//! denormal to zero, a term can differ in its last bits.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::context::{GpuContext, GpuError};
+use super::pass::{WorldPass, BATCH};
+use super::scene::{storage, GpuScene};
+use super::shaders::Entry;
+use crate::render::light::RenderLight;
+use crate::render::omega::OmegaLight;
+use crate::render::surface::ShadingPoint;
+
+/// The binding of the frame's lights.
+const LIGHTS: u32 = 10;
+
+/// `direct_light.wgsl`'s `ShadePoint`: the point and its `PointBrdf`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ShadePoint {
+    position: [f32; 3],
+    n_dot_v: f32,
+    geometric_normal: [f32; 3],
+    alpha2: f32,
+    normal: [f32; 3],
+    view_smith: f32,
+    view: [f32; 3],
+    metallic: f32,
+    diffuse: [f32; 3],
+    specular: f32,
+    base_color: [f32; 3],
+    dielectric_f0: f32,
+}
+
+impl From<&ShadingPoint> for ShadePoint {
+    fn from(point: &ShadingPoint) -> ShadePoint {
+        let brdf = point.brdf();
+        ShadePoint {
+            position: point.position.to_array(),
+            n_dot_v: brdf.n_dot_v,
+            geometric_normal: point.geometric_normal.to_array(),
+            alpha2: brdf.alpha2,
+            normal: brdf.n.to_array(),
+            view_smith: brdf.view_smith,
+            view: brdf.v.to_array(),
+            metallic: brdf.metallic,
+            diffuse: brdf.diffuse.to_array(),
+            specular: brdf.specular,
+            base_color: brdf.base_color.to_array(),
+            dielectric_f0: brdf.dielectric_f0,
+        }
+    }
+}
+
+/// `direct_light.wgsl`'s `Light`: an [`OmegaLight`] whose missing range is
+/// 0 rather than infinite, so the shader needs no infinities.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct FlatLight {
+    origin: [f32; 3],
+    directional: u32,
+    power: [f32; 3],
+    range_squared: f32,
+    axis: [f32; 3],
+    cos_outer: f32,
+    cos_inner: f32,
+    _pad: [u32; 3],
+}
+
+impl From<&RenderLight> for FlatLight {
+    fn from(light: &RenderLight) -> FlatLight {
+        let light = OmegaLight::from(light);
+        FlatLight {
+            origin: light.origin.to_array(),
+            directional: light.directional as u32,
+            power: light.power.to_array(),
+            range_squared: if light.range_squared.is_finite() {
+                light.range_squared
+            } else {
+                0.0
+            },
+            axis: light.axis.to_array(),
+            cos_outer: light.cos_outer,
+            cos_inner: light.cos_inner,
+            _pad: [0; 3],
+        }
+    }
+}
+
+/// `direct_light.wgsl`'s `DirectLight`: one point's answer.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct DirectLight {
+    radiance: [f32; 3],
+    shadow_rays: u32,
+}
+
+/// A frame's lights, uploaded once for all its batches.
+pub struct FrameLights {
+    buffer: wgpu::Buffer,
+    count: u32,
+}
+
+impl FrameLights {
+    pub fn upload(context: &GpuContext, lights: &[RenderLight]) -> Result<FrameLights, GpuError> {
+        let flat: Vec<FlatLight> = lights.iter().map(FlatLight::from).collect();
+        Ok(FrameLights {
+            buffer: storage(context, "lights", &flat)?,
+            count: lights.len() as u32,
+        })
+    }
+}
+
+/// The direct-light pipeline, made once per run.
+pub struct DirectLightPass {
+    pass: WorldPass,
+}
+
+impl DirectLightPass {
+    pub fn new(context: &GpuContext) -> DirectLightPass {
+        DirectLightPass {
+            pass: WorldPass::new(context, Entry::DirectLight, &[LIGHTS]),
+        }
+    }
+
+    /// Formula (1) at each of `points`, in order, and the shadow segments
+    /// traced for them.
+    pub fn run(
+        &self,
+        context: &GpuContext,
+        scene: &GpuScene,
+        lights: &FrameLights,
+        points: &[ShadingPoint],
+    ) -> Result<(Vec<Vec3>, u64), GpuError> {
+        let mut radiance = Vec::with_capacity(points.len());
+        let mut shadow_rays = 0;
+        for batch in points.chunks(BATCH) {
+            let items: Vec<ShadePoint> = batch.par_iter().map(ShadePoint::from).collect();
+            let answers: Vec<DirectLight> = self.pass.run(
+                context,
+                scene,
+                &items,
+                &[(LIGHTS, &lights.buffer)],
+                lights.count,
+            )?;
+            for answer in answers {
+                radiance.push(Vec3::from_array(answer.radiance));
+                shadow_rays += answer.shadow_rays as u64;
+            }
+        }
+        Ok((radiance, shadow_rays))
+    }
+}
