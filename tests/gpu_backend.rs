@@ -293,20 +293,16 @@ fn point_at(
     }
 }
 
-#[test]
-fn formula_one_on_the_gpu_gives_the_cpus_light_at_hard_points() {
-    let Some(mut gpu) = gpu() else { return };
-    let (positions, triangles) = cube(4);
-    let placements = hard_placements();
-    let world = world_of(&positions, &triangles, &placements);
-    let lights: Vec<RenderLight> = placements
-        .iter()
-        .flat_map(|(to_render, _)| lights_around(to_render.translation.into()))
-        .collect();
-    assert!(
-        lights.len() > 32,
-        "the lights span more than one group of 32"
-    );
+/// Shading points on every triangle's corners (shared vertices), edge
+/// midpoints (shared edges) and centre of the placed cubes, each seen from
+/// in front and from behind the surface, with and without a leaning
+/// shading normal, over four lobes (Lambert, dielectric, mirror-like metal,
+/// part metal part glass).
+fn hard_points(
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    placements: &[(Affine3A, bool)],
+) -> Vec<ShadingPoint> {
     let material = |metallic, roughness, specular, transmission| SurfaceMaterial {
         base_color: Vec3::new(0.8, 0.6, 0.4),
         metallic,
@@ -322,11 +318,8 @@ fn formula_one_on_the_gpu_gives_the_cpus_light_at_hard_points() {
         material(1.0, 0.05, 1.0, 0.0),
         material(0.4, 0.3, 1.0, 0.5),
     ];
-    // Points on every triangle's corners (shared vertices), edge midpoints
-    // (shared edges) and centre, each seen from in front and from behind
-    // the surface, with and without a leaning shading normal.
     let mut points = Vec::new();
-    for (to_render, _) in &placements {
+    for (to_render, _) in placements {
         let eye = to_render.transform_point3(Vec3::new(4.0, 5.0, 6.0));
         for (t, triangle) in triangles.iter().enumerate() {
             let [a, b, c] = triangle.map(|i| to_render.transform_point3(positions[i as usize]));
@@ -345,6 +338,24 @@ fn formula_one_on_the_gpu_gives_the_cpus_light_at_hard_points() {
         }
     }
 
+    points
+}
+
+#[test]
+fn formula_one_on_the_gpu_gives_the_cpus_light_at_hard_points() {
+    let Some(mut gpu) = gpu() else { return };
+    let (positions, triangles) = cube(4);
+    let placements = hard_placements();
+    let world = world_of(&positions, &triangles, &placements);
+    let lights: Vec<RenderLight> = placements
+        .iter()
+        .flat_map(|(to_render, _)| lights_around(to_render.translation.into()))
+        .collect();
+    assert!(
+        lights.len() > 32,
+        "the lights span more than one group of 32"
+    );
+    let points = hard_points(&positions, &triangles, &placements);
     let passes = gpu.passes_for(&world).expect("upload");
     let frame_lights = FrameLights::upload(passes.context, &lights).expect("lights");
     let (gpu_light, gpu_rays) = passes
@@ -375,6 +386,61 @@ fn formula_one_on_the_gpu_gives_the_cpus_light_at_hard_points() {
         points.len()
     );
     assert!(shadowed > 0, "no point is in full shadow");
+}
+
+/// Lights so faint that their terms fall below f32's smallest normal: the
+/// adapter may flush such a term to zero (and then trace no segment for
+/// it) where the CPU keeps it, and must give the CPU's bits everywhere
+/// else.
+#[test]
+fn denormal_terms_are_the_cpus_or_flushed() {
+    let Some(mut gpu) = gpu() else { return };
+    let (positions, triangles) = cube(2);
+    let placements = [(Affine3A::IDENTITY, false)];
+    let world = world_of(&positions, &triangles, &placements);
+    let faint = |intensity: f32, at: DVec3| {
+        let light = Light {
+            name: None,
+            kind: LightKind::Point,
+            color: Vec3::ONE,
+            intensity,
+            range: None,
+            radius: None,
+        };
+        RenderLight::place(&light, DMat4::from_translation(at), DVec3::ZERO, 0.0)
+    };
+    let lights = [
+        faint(1e-36, DVec3::new(0.0, 3.0, 0.0)),
+        faint(4e-38, DVec3::new(3.0, 0.5, 0.0)),
+        faint(1.0, DVec3::new(0.0, 0.0, 4.0)),
+    ];
+    let points = hard_points(&positions, &triangles, &placements);
+    let passes = gpu.passes_for(&world).expect("upload");
+    let frame_lights = FrameLights::upload(passes.context, &lights).expect("lights");
+    let (gpu_light, _) = passes
+        .direct
+        .run(passes.context, passes.scene, &frame_lights, &points)
+        .expect("direct light");
+    let lanes = LightLanes::new(&lights);
+    let mut tiny = 0;
+    for (point, gpu_value) in points.iter().zip(&gpu_light) {
+        let (cpu_value, _) = whitted::direct_light(point, &lanes, &world);
+        // What the faint lights alone bring at most.
+        let faint_only = LightLanes::new(&lights[..2]);
+        let (faint_value, _) = whitted::direct_light(point, &faint_only, &world);
+        tiny +=
+            (faint_value != Vec3::ZERO && faint_value.max_element() < f32::MIN_POSITIVE) as usize;
+        let difference = (*gpu_value - cpu_value).abs().max_element();
+        if passes.context.exact {
+            assert!(
+                *gpu_value == cpu_value || difference <= f32::MIN_POSITIVE,
+                "{point:?}: {gpu_value} against {cpu_value}"
+            );
+        } else {
+            assert!(difference <= 1e-4 * cpu_value.max_element().max(f32::MIN_POSITIVE));
+        }
+    }
+    assert!(tiny > 0, "no term is denormal on the CPU");
 }
 
 /// Renders `scene` in `dir` on `backend` with `args`; the frames' paths.
