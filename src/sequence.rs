@@ -8,10 +8,9 @@ use std::time::Instant;
 
 use crate::accel::{World, WorldObject};
 use crate::anim::pose::ClipSelection;
-use crate::backend::{Backend, BackendError, RenderError, Shading};
+use crate::backend::{Backend, BackendError, RenderError};
 use crate::import::{self, ImportError};
 use crate::lightmesh::cache::{static_geometry_hash, LightKey, StaticMaskCache};
-use crate::lightmesh::interpolate::Variant;
 use crate::lightmesh::invalidate::ChangedRegion;
 use crate::lightmesh::lattice::Lattice;
 use crate::lightmesh::{spacing, LightMesh, LightMeshError};
@@ -21,7 +20,7 @@ use crate::render::FrameJob;
 use crate::scene::pose::Pose;
 use crate::scene::SceneDesc;
 use crate::schedule::{FrameDelta, FrameSet, Timeline};
-use crate::settings::{Method, Settings};
+use crate::settings::Settings;
 use crate::stats::{FrameStats, RunStats};
 
 /// Why a run stopped. `is_bad_input` separates the user's mistakes (exit
@@ -45,6 +44,8 @@ pub enum RunError {
     Output(#[from] OutputError),
     #[error(transparent)]
     Backend(#[from] BackendError),
+    #[error(transparent)]
+    Render(RenderError),
 }
 
 impl RunError {
@@ -331,21 +332,10 @@ impl Sequence {
             stats.copied = true;
             return Ok(image.clone());
         }
-        if matches!(settings.method, Method::Lmm | Method::Lmm1) {
+        if settings.method.uses_light_mesh() {
             self.prepare_light_mesh(placed, settings)?;
         }
-        let mut shading = match (settings.method, self.light_mesh.as_mut()) {
-            (Method::Lmm | Method::Lmm1, Some(mesh)) => Shading::LightMesh {
-                mesh,
-                variant: if settings.method == Method::Lmm {
-                    Variant::Lmm
-                } else {
-                    Variant::Lmm1
-                },
-            },
-            (Method::Area, _) => Shading::Area,
-            _ => Shading::Whitted,
-        };
+        let light_mesh = (self.light_mesh.as_mut()).filter(|_| settings.method.uses_light_mesh());
         let job = FrameJob {
             scene: &self.scene,
             frame: placed,
@@ -356,13 +346,14 @@ impl Sequence {
             max_depth: settings.max_depth,
         };
         let image = backend
-            .render(&job, &mut shading, stats)
+            .render(&job, settings.method, light_mesh, stats)
             .map_err(|error| match error {
                 RenderError::LightMesh(source) => RunError::LightMesh {
                     file: self.scene_file.clone(),
                     source,
                 },
                 RenderError::Gpu(error) => RunError::Backend(error.into()),
+                error @ RenderError::NoLightMesh(_) => RunError::Render(error),
             })?;
         if let Some(mesh_stats) = &mut stats.lightmesh {
             mesh_stats.bits_loaded = std::mem::take(&mut self.bits_loaded);

@@ -27,13 +27,14 @@ pub use trace::RayQueries;
 
 use super::band::{bands, resolve, shaded_value};
 use super::sampling::{film_position, lamp_sample};
-use super::{thread_pool, BackendError, RenderError, Shading};
+use super::{thread_pool, BackendError, RenderError};
 use crate::accel::{Hit, Ray};
 use crate::output::Image;
 use crate::render::omega::LightLanes;
 use crate::render::scatter::secondary_rays;
 use crate::render::surface::ShadingPoint;
 use crate::render::{area, whitted, FrameJob};
+use crate::settings::Method;
 use crate::stats::FrameStats;
 
 /// Points whose shadow segments go to the GPU together: at 64 lights, about
@@ -103,7 +104,7 @@ impl GpuBackend {
     pub fn render(
         &mut self,
         job: &FrameJob,
-        shading: &mut Shading,
+        method: Method,
         stats: &mut FrameStats,
     ) -> Result<Image, RenderError> {
         let start = Instant::now();
@@ -116,10 +117,10 @@ impl GpuBackend {
             scene,
             lanes: LightLanes::new(&job.frame.lights),
         };
-        let shading = match shading {
-            Shading::Whitted => DeferredShading::Whitted,
-            Shading::Area => DeferredShading::Area,
-            Shading::LightMesh { .. } => return Err(GpuError::LightMeshOnGpu.into()),
+        let shading = match method {
+            Method::Whitted => DeferredShading::Whitted,
+            Method::Area => DeferredShading::Area,
+            Method::Lmm | Method::Lmm1 => return Err(GpuError::LightMeshOnGpu.into()),
         };
         self.pool.install(|| {
             let mut pixels = Vec::with_capacity((job.width * job.height) as usize);
