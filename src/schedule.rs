@@ -2,11 +2,14 @@
 //! CLI's RANGE argument into a sorted list of frame numbers; [`Timeline`]
 //! maps a frame to its time in seconds, which the pose of the scene is
 //! sampled at; [`FrameDelta`] says what changed from one rendered frame to
-//! the next, which decides what a frame must recompute.
+//! the next, which decides what a frame must recompute, and brings the
+//! world up to the new frame ([`FrameDelta::update_world`]).
 
 use std::fmt;
 use std::str::FromStr;
 
+use crate::accel::World;
+use crate::lightmesh::invalidate::ChangedRegion;
 use crate::render::frame::FrameScene;
 use crate::render::light::{LightSource, RenderLight};
 
@@ -273,6 +276,34 @@ impl FrameDelta {
                 .filter(|&i| before.deformed[i] != after.deformed[i])
                 .collect(),
         }
+    }
+
+    /// Brings `world` from the frame before to `after`, the frame this
+    /// delta leads to: moved objects get new instance transforms, deformed
+    /// ones new positions. Returns the regions where geometry changed, for
+    /// the light mesh to invalidate (see [`World::update_object`]).
+    pub fn update_world(&self, world: &mut World, after: &FrameScene) -> Vec<ChangedRegion> {
+        let mut changed: Vec<usize> = (self.objects_moved.iter())
+            .chain(&self.objects_deformed)
+            .copied()
+            .collect();
+        changed.sort_unstable();
+        changed.dedup();
+        changed
+            .into_iter()
+            .flat_map(|object| {
+                let deformed = after.deformed[object]
+                    .as_deref()
+                    .filter(|_| self.objects_deformed.contains(&object));
+                world.update_object(
+                    object,
+                    after.objects[object].to_render,
+                    deformed.map(|mesh| &mesh.positions[..]),
+                    self.objects_moved.contains(&object),
+                )
+            })
+            .map(ChangedRegion::from)
+            .collect()
     }
 
     /// Nothing that the image depends on changed: the frame is a copy.

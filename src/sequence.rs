@@ -1,27 +1,27 @@
 //! The frame loop: load a scene once, build its ray-tracing world once, then
-//! for each requested frame pose the scene, render it on the backend and
-//! write the frame. This is the only place that knows about time; the
-//! integrators see one frame at a time.
+//! for each requested frame pose and place the scene, bring the world and
+//! the light mesh up to it, render it on the backend and write the frame.
+//! This is the only place that knows about time; the integrators see one
+//! frame at a time. What changed between two frames, and how the world
+//! follows, is [`FrameDelta`]'s; the light mesh's reuse across frames and
+//! its disk cache are [`PersistentLightMesh`]'s.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::accel::{World, WorldObject};
+use crate::accel::World;
 use crate::anim::pose::ClipSelection;
-use crate::backend::{Backend, BackendError, RenderError, Shading};
+use crate::backend::{Backend, BackendError, RenderError};
 use crate::import::{self, ImportError};
-use crate::lightmesh::cache::{static_geometry_hash, LightKey, StaticMaskCache};
-use crate::lightmesh::interpolate::Variant;
-use crate::lightmesh::invalidate::ChangedRegion;
-use crate::lightmesh::lattice::Lattice;
-use crate::lightmesh::{spacing, LightMesh, LightMeshError};
+use crate::lightmesh::persistent::PersistentLightMesh;
+use crate::lightmesh::{LightMesh, LightMeshError};
 use crate::output::{self, FramePattern, OutputError};
 use crate::render::frame::{CameraChoice, FrameScene, PlaceError, SceneBounds};
 use crate::render::FrameJob;
 use crate::scene::pose::Pose;
 use crate::scene::SceneDesc;
 use crate::schedule::{FrameDelta, FrameSet, Timeline};
-use crate::settings::{Method, Settings};
+use crate::settings::Settings;
 use crate::stats::{FrameStats, RunStats};
 
 /// Why a run stopped. `is_bad_input` separates the user's mistakes (exit
@@ -45,6 +45,8 @@ pub enum RunError {
     Output(#[from] OutputError),
     #[error(transparent)]
     Backend(#[from] BackendError),
+    #[error(transparent)]
+    Render(RenderError),
 }
 
 impl RunError {
@@ -89,8 +91,8 @@ pub struct Sequence {
     /// Radius of the scene's bounding sphere at rest, in metres.
     scene_radius: f32,
     /// The light mesh, made on the first LMM frame and kept so that later
-    /// frames reuse its masks.
-    light_mesh: Option<LightMesh>,
+    /// frames reuse its masks, with its disk cache.
+    light_mesh: PersistentLightMesh,
     /// Which animation clips play.
     clips: ClipSelection,
     /// The previous frame's placement, to tell what changed.
@@ -99,18 +101,6 @@ pub struct Sequence {
     /// same picture (nothing changed), so it is copied.
     last_image: Option<output::Image>,
     still: bool,
-    /// Content hash of the static geometry, part of the disk cache's key.
-    static_geometry: u128,
-    /// Where the light mesh's static masks are loaded from and saved to;
-    /// None (the default for sequences made in code) uses no disk cache.
-    cache_dir: Option<PathBuf>,
-    /// Bits the disk cache gave the light mesh, reported with the next
-    /// frame's stats.
-    bits_loaded: u64,
-    /// Where each light stood when the light mesh was made, and the static
-    /// bits of those positions, kept when the light moved away, to save.
-    cache_start: Vec<LightKey>,
-    cache_kept: StaticMaskCache,
 }
 
 impl Sequence {
@@ -139,39 +129,17 @@ impl Sequence {
             file: scene_file.clone(),
             source,
         })?;
-        let world = build_world(&scene, &placed);
-        let static_geometry = static_geometry_hash(
-            placed
-                .objects
-                .iter()
-                .enumerate()
-                .filter(|(_, object)| !object.dynamic)
-                .map(|(index, object)| {
-                    let mesh = &scene.meshes[object.mesh];
-                    (
-                        index,
-                        &mesh.positions[..],
-                        &mesh.triangles[..],
-                        object.to_render,
-                    )
-                }),
-        );
         Ok(Sequence {
+            world: placed.build_world(&scene),
+            light_mesh: PersistentLightMesh::new(&scene, &placed),
             scene,
             scene_file,
-            world,
             anchor,
             scene_radius,
-            light_mesh: None,
             clips: ClipSelection::All,
             previous: None,
             last_image: None,
             still: false,
-            static_geometry,
-            cache_dir: None,
-            bits_loaded: 0,
-            cache_start: Vec::new(),
-            cache_kept: StaticMaskCache::default(),
         })
     }
 
@@ -181,7 +149,7 @@ impl Sequence {
 
     /// The light mesh, once an LMM frame has made it.
     pub fn light_mesh(&self) -> Option<&LightMesh> {
-        self.light_mesh.as_ref()
+        self.light_mesh.get()
     }
 
     /// Plays `clips` from the next frame on (all clips by default).
@@ -192,19 +160,17 @@ impl Sequence {
     /// Uses `dir` as the light mesh's disk cache (static masks), or none.
     /// Takes effect when the light mesh is made, on the first LMM frame.
     pub fn set_cache_dir(&mut self, dir: Option<PathBuf>) {
-        self.cache_dir = dir;
+        self.light_mesh.set_cache_dir(dir);
     }
 
     /// Saves the light mesh's static masks to the disk cache, merged with
     /// what other workers saved there: for the lights where the last frame
     /// placed them, and where they stood when the light mesh was made.
-    /// Does nothing without a cache directory or a light mesh.
+    /// Does nothing without a cache directory, a light mesh or a frame.
     pub fn save_cache(&self) -> Result<(), OutputError> {
-        match (&self.cache_dir, &self.light_mesh, &self.previous) {
-            (Some(dir), Some(mesh), Some(placed)) => {
-                mesh.save_static_masks(dir, self.static_geometry, &placed.lights, &self.cache_kept)
-            }
-            _ => Ok(()),
+        match &self.previous {
+            Some(placed) => self.light_mesh.save(&placed.lights),
+            None => Ok(()),
         }
     }
 
@@ -243,31 +209,11 @@ impl Sequence {
         };
 
         let started = Instant::now();
-        let mut changed: Vec<usize> = delta
-            .objects_moved
-            .iter()
-            .chain(&delta.objects_deformed)
-            .copied()
-            .collect();
-        changed.sort_unstable();
-        changed.dedup();
-        let regions: Vec<ChangedRegion> = changed
-            .into_iter()
-            .flat_map(|object| self.update_object(object, &placed, &delta))
-            .collect();
-        if let (Some(mesh), Some(_), Some(previous)) =
-            (&self.light_mesh, &self.cache_dir, &self.previous)
-        {
-            // Bits of a light leaving its starting position are kept for
-            // the disk cache before invalidation drops them.
-            let leaving = delta.lights_moved.iter().copied().filter(|&light| {
-                self.cache_start.get(light) == Some(&LightKey::of(&previous.lights[light]))
-            });
-            mesh.keep_static_masks(&mut self.cache_kept, &previous.lights, leaving);
-        }
-        if let Some(mesh) = &mut self.light_mesh {
-            stats.bits_invalidated = mesh.invalidate(&regions, &delta.lights_moved, &placed.lights);
-        }
+        let regions = delta.update_world(&mut self.world, &placed);
+        let before = self.previous.as_ref().map(|previous| &previous.lights[..]);
+        stats.bits_invalidated =
+            self.light_mesh
+                .invalidate(before, &placed.lights, &regions, &delta.lights_moved);
         stats.invalidate_seconds = started.elapsed().as_secs_f64();
         stats.camera_moved = delta.camera_moved;
         stats.lights_moved = delta.lights_moved.len() as u64;
@@ -275,48 +221,6 @@ impl Sequence {
         self.still = self.previous.is_some() && delta.is_still();
         self.previous = Some(placed.clone());
         Ok(placed)
-    }
-
-    /// Brings one moved or deformed object of the world up to `placed`
-    /// and returns where its geometry changed. A rigid move changes all of
-    /// it: its old and its new bounds. A deformation in place changes only
-    /// the triangles whose vertices moved: the old and new boxes of the
-    /// object's clusters that hold them (see `accel::clusters`), much
-    /// tighter around a swaying crown than its whole box.
-    fn update_object(
-        &mut self,
-        object: usize,
-        placed: &FrameScene,
-        delta: &FrameDelta,
-    ) -> Vec<ChangedRegion> {
-        let before = self.world.object_bounds(object);
-        let update = match &placed.deformed[object] {
-            Some(mesh) if delta.objects_deformed.contains(&object) => {
-                self.world.set_positions(object, &mesh.positions)
-            }
-            _ => Ok(Vec::new()),
-        }
-        .and_then(|deformed| {
-            self.world
-                .set_transform(object, placed.objects[object].to_render)
-                .map(|()| deformed)
-        });
-        // Static objects never move; an update refused for one means the
-        // scene model and the world disagree, which only a bug can cause.
-        debug_assert!(
-            update.is_ok(),
-            "world update of object {object}: {update:?}"
-        );
-        let changed = match update {
-            Ok(parts) if !delta.objects_moved.contains(&object) => parts,
-            // A rigid move changes everything; so, to stay safe, does an
-            // update the world refused.
-            _ => before
-                .into_iter()
-                .chain(self.world.object_bounds(object))
-                .collect(),
-        };
-        changed.into_iter().map(ChangedRegion::from).collect()
     }
 
     /// Renders one frame into an image, filling `stats`.
@@ -331,20 +235,17 @@ impl Sequence {
             stats.copied = true;
             return Ok(image.clone());
         }
-        if matches!(settings.method, Method::Lmm | Method::Lmm1) {
-            self.prepare_light_mesh(placed, settings)?;
-        }
-        let mut shading = match (settings.method, self.light_mesh.as_mut()) {
-            (Method::Lmm | Method::Lmm1, Some(mesh)) => Shading::LightMesh {
-                mesh,
-                variant: if settings.method == Method::Lmm {
-                    Variant::Lmm
-                } else {
-                    Variant::Lmm1
-                },
-            },
-            (Method::Area, _) => Shading::Area,
-            _ => Shading::Whitted,
+        let light_mesh = if settings.method.uses_light_mesh() {
+            let mesh = self
+                .light_mesh
+                .prepare(&placed.lights, &settings.lightmesh, self.scene_radius)
+                .map_err(|source| RunError::LightMesh {
+                    file: self.scene_file.clone(),
+                    source,
+                })?;
+            Some(mesh)
+        } else {
+            None
         };
         let job = FrameJob {
             scene: &self.scene,
@@ -356,71 +257,21 @@ impl Sequence {
             max_depth: settings.max_depth,
         };
         let image = backend
-            .render(&job, &mut shading, stats)
+            .render(&job, settings.method, light_mesh, stats)
             .map_err(|error| match error {
                 RenderError::LightMesh(source) => RunError::LightMesh {
                     file: self.scene_file.clone(),
                     source,
                 },
                 RenderError::Gpu(error) => RunError::Backend(error.into()),
+                error @ RenderError::NoLightMesh(_) => RunError::Render(error),
             })?;
         if let Some(mesh_stats) = &mut stats.lightmesh {
-            mesh_stats.bits_loaded = std::mem::take(&mut self.bits_loaded);
+            mesh_stats.bits_loaded = self.light_mesh.take_bits_loaded();
         }
         self.last_image = Some(image.clone());
         Ok(image)
     }
-
-    /// The sequence's light mesh, made on first use with `h` from the
-    /// settings or from the lamp radii (see `lightmesh::spacing`).
-    fn prepare_light_mesh(
-        &mut self,
-        placed: &FrameScene,
-        settings: &Settings,
-    ) -> Result<(), RunError> {
-        if self.light_mesh.is_none() {
-            let ki = settings.lightmesh.ki;
-            let h = settings
-                .lightmesh
-                .h
-                .unwrap_or_else(|| spacing::default_h(&placed.lights, ki, 2.0 * self.scene_radius));
-            let lattice = Lattice::new(h);
-            let reach = self.scene_radius + ki * h;
-            if !lattice.covers(glam::Vec3::ZERO, reach) {
-                return Err(RunError::LightMesh {
-                    file: self.scene_file.clone(),
-                    source: LightMeshError::OutOfRange { h, distance: reach },
-                });
-            }
-            let limit = settings.lightmesh.max_memory_mib.saturating_mul(1 << 20);
-            let mut mesh = LightMesh::new(lattice, ki, placed.lights.len(), limit);
-            if let Some(dir) = &self.cache_dir {
-                self.bits_loaded =
-                    mesh.load_static_masks(dir, self.static_geometry, &placed.lights);
-                self.cache_start = placed.lights.iter().map(LightKey::of).collect();
-            }
-            self.light_mesh = Some(mesh);
-        }
-        Ok(())
-    }
-}
-
-/// The two-level world over every mesh instance of `placed`.
-fn build_world(scene: &SceneDesc, placed: &FrameScene) -> World {
-    let objects: Vec<WorldObject> = placed
-        .objects
-        .iter()
-        .map(|object| {
-            let mesh = &scene.meshes[object.mesh];
-            WorldObject {
-                positions: &mesh.positions,
-                triangles: &mesh.triangles,
-                to_render: object.to_render,
-                dynamic: object.dynamic,
-            }
-        })
-        .collect();
-    World::build(&objects)
 }
 
 /// Renders every frame of `job`, writing each as it is done, and reports

@@ -96,6 +96,20 @@ pub enum Method {
     Area,
 }
 
+impl Method {
+    /// Whether frames shade from a light mesh (LMM, LMM1), which the
+    /// sequence makes on the first frame and keeps for the next ones.
+    pub fn uses_light_mesh(self) -> bool {
+        matches!(self, Method::Lmm | Method::Lmm1)
+    }
+
+    /// Whether formula (2) keeps only the nodes a point sees (LMM's step 3,
+    /// one point-to-node segment per candidate); LMM1 keeps them all.
+    pub fn tests_point_to_node(self) -> bool {
+        self == Method::Lmm
+    }
+}
+
 impl std::fmt::Display for Method {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
@@ -229,7 +243,7 @@ impl Settings {
                 self.max_depth
             ));
         }
-        if self.backend == BackendKind::Gpu && matches!(self.method, Method::Lmm | Method::Lmm1) {
+        if self.backend == BackendKind::Gpu && self.method.uses_light_mesh() {
             return Err(format!(
                 "method {} runs on backend cpu only: backend gpu renders whitted and area",
                 self.method

@@ -400,6 +400,34 @@ fn a_lattice_too_fine_for_the_memory_limit_is_a_clear_error() {
 }
 
 #[test]
+fn a_light_mesh_method_without_a_light_mesh_is_an_error_not_a_panic() {
+    let settings = settings(8, 8);
+    let mut sequence = lmanim::sequence::Sequence::new(lit_floor(), "floor.gltf".into()).unwrap();
+    let placed = sequence.place(&settings).unwrap();
+    let world = lmanim::accel::World::build(&[]);
+    let job = lmanim::render::FrameJob {
+        scene: sequence.scene(),
+        frame: &placed,
+        world: &world,
+        width: settings.width,
+        height: settings.height,
+        spp: settings.spp,
+        max_depth: settings.max_depth,
+    };
+    let backend = lmanim::backend::CpuBackend::new(Some(1)).unwrap();
+    for method in [Method::Lmm, Method::Lmm1] {
+        let error = backend
+            .render(&job, method, None, &mut Default::default())
+            .unwrap_err();
+        assert!(
+            matches!(error, lmanim::backend::RenderError::NoLightMesh(m) if m == method),
+            "{error}"
+        );
+        assert!(error.to_string().contains(&format!("--method {method}")));
+    }
+}
+
+#[test]
 fn a_lattice_coarser_than_the_scene_still_renders() {
     let image = render(
         lit_floor(),

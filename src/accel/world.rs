@@ -307,6 +307,43 @@ impl World {
         Ok(changed)
     }
 
+    /// Brings dynamic object `object` to the render-space transform
+    /// `to_render` and, when it deformed, to the object-space `positions`;
+    /// `moved` says the transform changed. Returns where its geometry
+    /// changed, for invalidation: a rigid move changes all of it, its old
+    /// and its new bounds; a deformation in place only the old and new
+    /// boxes of the clusters with a moved vertex ([`World::set_positions`]),
+    /// much tighter around a swaying crown than its whole box.
+    pub fn update_object(
+        &mut self,
+        object: usize,
+        to_render: Affine3A,
+        positions: Option<&[Vec3]>,
+        moved: bool,
+    ) -> Vec<Bounds> {
+        let before = self.object_bounds(object);
+        let update = match positions {
+            Some(positions) => self.set_positions(object, positions),
+            None => Ok(Vec::new()),
+        }
+        .and_then(|deformed| self.set_transform(object, to_render).map(|()| deformed));
+        // Static objects never move; an update refused for one means the
+        // scene model and the world disagree, which only a bug can cause.
+        debug_assert!(
+            update.is_ok(),
+            "world update of object {object}: {update:?}"
+        );
+        match update {
+            Ok(parts) if !moved => parts,
+            // A rigid move changes everything; so, to stay safe, does an
+            // update the world refused.
+            _ => before
+                .into_iter()
+                .chain(self.object_bounds(object))
+                .collect(),
+        }
+    }
+
     /// Render-space bounds of everything in the world now.
     pub fn bounds(&self) -> Bounds {
         (self.instances.iter()).fold(self.static_bounds, |b, i| b.union(i.render_bounds()))

@@ -17,15 +17,16 @@ use rayon::prelude::*;
 
 use super::band::{bands, resolve, shaded_value, TILE};
 use super::sampling::{film_position, lamp_sample};
-use super::{thread_pool, BackendError};
+use super::{thread_pool, BackendError, RenderError};
 use crate::accel::Ray;
-use crate::lightmesh::interpolate::{PointCounts, Scratch, Variant};
-use crate::lightmesh::{LightMesh, LightMeshError, LightMeshStats};
+use crate::lightmesh::interpolate::{PointCounts, Scratch};
+use crate::lightmesh::{LightMesh, LightMeshStats};
 use crate::output::Image;
 use crate::render::omega::LightLanes;
 use crate::render::scatter::secondary_rays;
 use crate::render::surface::ShadingPoint;
 use crate::render::{area, whitted, FrameJob};
+use crate::settings::Method;
 use crate::stats::FrameStats;
 
 /// Renders frames on a rayon pool of its own.
@@ -45,30 +46,35 @@ impl CpuBackend {
         self.pool.current_num_threads()
     }
 
-    /// Renders one frame; stage times, ray and point counts go to `stats`.
+    /// Renders one frame by `method`; stage times, ray and point counts go
+    /// to `stats`. The light-mesh methods shade from `light_mesh` (an error
+    /// without one); the other methods ignore it.
     pub fn render(
         &self,
         job: &FrameJob,
-        shading: &mut Shading,
+        method: Method,
+        mut light_mesh: Option<&mut LightMesh>,
         stats: &mut FrameStats,
-    ) -> Result<Image, LightMeshError> {
+    ) -> Result<Image, RenderError> {
         self.pool.install(|| {
             let mut pixels = Vec::with_capacity((job.width * job.height) as usize);
             let mut counts = PointCounts::default();
             let mut lightmesh = LightMeshStats::default();
             let lanes = LightLanes::new(&job.frame.lights);
             for rows in bands(job) {
-                pixels.extend(render_band(
+                let (band, band_counts) = render_band(
                     job,
                     &lanes,
                     rows,
-                    shading,
+                    method,
+                    light_mesh.as_deref_mut(),
                     stats,
-                    &mut counts,
                     &mut lightmesh,
-                )?);
+                )?;
+                pixels.extend(band);
+                counts += band_counts;
             }
-            if let Shading::LightMesh { mesh, .. } = shading {
+            if let (true, Some(mesh)) = (method.uses_light_mesh(), light_mesh) {
                 let points = stats.shading_points.max(1) as f64;
                 stats.lightmesh = Some(LightMeshStats {
                     h: mesh.lattice.h,
@@ -90,29 +96,17 @@ impl CpuBackend {
     }
 }
 
-/// How the direct light of shading points is computed.
-pub enum Shading<'a> {
-    /// Formula (1): a shadow ray per point and light.
-    Whitted,
-    /// Formula (2) from a light mesh that persists across frames.
-    LightMesh {
-        mesh: &'a mut LightMesh,
-        variant: Variant,
-    },
-    /// Spherical lamps sampled by Monte Carlo, one shadow ray per point and
-    /// light: the soft-shadow reference.
-    Area,
-}
-
+/// One band of rows through every stage: its pixels, and what shading its
+/// points cost (summed into the frame's light-mesh statistics).
 fn render_band(
     job: &FrameJob,
     lanes: &LightLanes,
     rows: std::ops::Range<u32>,
-    shading: &mut Shading,
+    method: Method,
+    light_mesh: Option<&mut LightMesh>,
     stats: &mut FrameStats,
-    counts: &mut PointCounts,
     lightmesh: &mut LightMeshStats,
-) -> Result<Vec<Vec4>, LightMeshError> {
+) -> Result<(Vec<Vec4>, PointCounts), RenderError> {
     let band_samples = ((rows.end - rows.start) * job.width * job.spp) as usize;
 
     let start = Instant::now();
@@ -137,8 +131,8 @@ fn render_band(
 
     let lights = &job.frame.lights;
     let segments_before = lightmesh.fill_segments;
-    let (shaded, band_counts): (Vec<Vec3>, PointCounts) = match shading {
-        Shading::Whitted => shade_stage(
+    let (shaded, band_counts): (Vec<Vec3>, PointCounts) = match (method, light_mesh) {
+        (Method::Whitted, _) => shade_stage(
             &points,
             stats,
             || (),
@@ -147,7 +141,7 @@ fn render_band(
                 (direct, PointCounts::shadow_rays(shadow_rays))
             },
         ),
-        Shading::Area => {
+        (Method::Area, _) => {
             // Lamp samples are seeded by the sample's index in the whole
             // image; `point.sample` counts from the band's first row.
             let band_start = rows.start as u64 * job.width as u64 * job.spp as u64;
@@ -165,7 +159,7 @@ fn render_band(
                 },
             )
         }
-        Shading::LightMesh { mesh, variant } => {
+        (Method::Lmm | Method::Lmm1, Some(mesh)) => {
             let start = Instant::now();
             let demand = mesh.demand(&points, lanes)?;
             stats.add_stage_time("demand", start.elapsed().as_secs_f64());
@@ -174,7 +168,8 @@ fn render_band(
             mesh.fill(&demand, lights, job.world, lightmesh)?;
             stats.add_stage_time("fill", start.elapsed().as_secs_f64());
 
-            let (mesh, variant) = (&**mesh, *variant);
+            let mesh = &*mesh;
+            let point_to_node_tests = method.tests_point_to_node();
             let scratch = || Scratch::new(mesh);
             shade_stage(&points, stats, scratch, |scratch, index, point| {
                 mesh.shade(
@@ -182,23 +177,23 @@ fn render_band(
                     demand.reach_of(index),
                     lanes,
                     job.world,
-                    variant,
+                    point_to_node_tests,
                     scratch,
                 )
             })
         }
+        (Method::Lmm | Method::Lmm1, None) => return Err(RenderError::NoLightMesh(method)),
     };
     // Every occlusion segment is a shadow ray: formula (1)'s, the fill's
     // node-to-light ones and LMM's point-to-node tests.
     stats.rays.shadow +=
         band_counts.shadow_rays + band_counts.p2n_tests + lightmesh.fill_segments - segments_before;
-    *counts += band_counts;
     stats.shading_points += points.len() as u64;
 
     let start = Instant::now();
     let pixels = resolve(job, band_samples, &points, primary_count, &shaded);
     stats.add_stage_time("resolve", start.elapsed().as_secs_f64());
-    Ok(pixels)
+    Ok((pixels, band_counts))
 }
 
 /// The last stage before resolve: every point's emission plus its direct

@@ -10,13 +10,13 @@ pub mod cpu;
 pub mod gpu;
 mod sampling;
 
-pub use cpu::{CpuBackend, Shading};
+pub use cpu::CpuBackend;
 pub use gpu::{GpuBackend, GpuError};
 
-use crate::lightmesh::LightMeshError;
+use crate::lightmesh::{LightMesh, LightMeshError};
 use crate::output::Image;
 use crate::render::FrameJob;
-use crate::settings::BackendKind;
+use crate::settings::{BackendKind, Method};
 use crate::stats::FrameStats;
 
 /// Why a backend could not start.
@@ -37,6 +37,10 @@ pub enum RenderError {
     /// The light mesh refused the frame (a setting the scene cannot meet).
     #[error(transparent)]
     LightMesh(#[from] LightMeshError),
+    /// A light-mesh method was asked for without the light mesh it shades
+    /// from: the caller's mistake, never the scene's.
+    #[error("--method {0} shades from a light mesh, and the frame came without one")]
+    NoLightMesh(Method),
     #[error(transparent)]
     Gpu(#[from] GpuError),
 }
@@ -73,16 +77,20 @@ impl Backend {
         }
     }
 
-    /// Renders one frame; stage times, ray and point counts go to `stats`.
+    /// Renders one frame by `method`; stage times, ray and point counts go
+    /// to `stats`. The light-mesh methods shade from `light_mesh`, which
+    /// the caller keeps across frames so that its masks are reused; the
+    /// other methods ignore it.
     pub fn render(
         &mut self,
         job: &FrameJob,
-        shading: &mut Shading,
+        method: Method,
+        light_mesh: Option<&mut LightMesh>,
         stats: &mut FrameStats,
     ) -> Result<Image, RenderError> {
         match self {
-            Backend::Cpu(cpu) => Ok(cpu.render(job, shading, stats)?),
-            Backend::Gpu(gpu) => gpu.render(job, shading, stats),
+            Backend::Cpu(cpu) => cpu.render(job, method, light_mesh, stats),
+            Backend::Gpu(gpu) => gpu.render(job, method, stats),
         }
     }
 }

@@ -5,14 +5,14 @@
 //! range) can load them instead of tracing them again. The dynamic layer
 //! is never cached.
 //!
-//! In the frame loop the sequence loads the file when it makes the light
-//! mesh (the first LMM frame), importing each current light's bits into
-//! the mask store before the first fill, and saves at the end of the run,
-//! merging with whatever another worker wrote meanwhile. What is saved are
-//! the bits for each light where the last frame placed it and where it
-//! stood when the light mesh was made (kept aside when the light first
-//! moved away): the positions a later run of the same or a later frame
-//! range starts from. Positions in between are not kept, so a light
+//! In the frame loop the sequence's light mesh (`persistent`) loads the
+//! file when it is made (the first LMM frame), importing each current
+//! light's bits into the mask store before the first fill, and saves at the
+//! end of the run, merging with whatever another worker wrote meanwhile.
+//! What is saved are the bits for each light where the last frame placed
+//! it and where it stood when the light mesh was made (kept aside when the
+//! light first moved away): the positions a later run of the same or a
+//! later frame range starts from. Positions in between are not kept, so a light
 //! moving every frame does not grow the file by a section per frame.
 //!
 //! A file is named by a 128-bit content hash ([`CacheKey`]) of the format

@@ -18,13 +18,6 @@ use crate::render::omega::{LightLanes, PointLanes, LANES};
 use crate::render::surface::ShadingPoint;
 use crate::render::whitted;
 
-/// Which variant of the method: LMM tests V(x_k, P), LMM1 does not.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Variant {
-    Lmm,
-    Lmm1,
-}
-
 /// What shading one point cost, summed into the frame's statistics.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PointCounts {
@@ -82,14 +75,15 @@ impl<'a> Scratch<'a> {
 impl LightMesh {
     /// Direct light at `point` by formula (2). `reach` holds the lights that
     /// can reach the point (from the demand stage); every bit this reads was
-    /// filled from that demand.
+    /// filled from that demand. With `point_to_node_tests` (LMM) only the
+    /// nodes the point sees are interpolated; without (LMM1) all of them.
     pub fn shade(
         &self,
         point: &ShadingPoint,
         reach: &[u64],
         lights: &LightLanes,
         world: &World,
-        variant: Variant,
+        point_to_node_tests: bool,
         scratch: &mut Scratch,
     ) -> (Vec3, PointCounts) {
         let mut counts = PointCounts::default();
@@ -104,7 +98,7 @@ impl LightMesh {
         self.lattice
             .half_ball(point.position, point.geometric_normal, self.radius(), nodes);
         counts.candidates = nodes.len() as u64;
-        if variant == Variant::Lmm {
+        if point_to_node_tests {
             counts.p2n_tests = nodes.len() as u64;
             let origin = offset_ray_origin(point.position, point.geometric_normal);
             let lattice = self.lattice;

@@ -14,6 +14,7 @@ pub mod interpolate;
 pub mod invalidate;
 pub mod lattice;
 pub mod masks;
+pub mod persistent;
 mod region_tree;
 pub mod spacing;
 

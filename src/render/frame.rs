@@ -11,6 +11,7 @@ use glam::{Affine3A, DMat4, DVec3, Mat3, Vec3};
 
 use super::camera::RenderCamera;
 use super::light::RenderLight;
+use crate::accel::{World, WorldObject};
 use crate::anim::deform::{deformed_mesh, DeformedMesh};
 use crate::scene::pose::{dynamic_nodes, Pose};
 use crate::scene::{Light, Material, Projection, SceneDesc};
@@ -94,6 +95,24 @@ pub enum PlaceError {
 }
 
 impl FrameScene {
+    /// The two-level world over every mesh instance of this placement,
+    /// built once per sequence; later frames update it in place
+    /// ([`FrameDelta::update_world`](crate::schedule::FrameDelta::update_world)).
+    pub fn build_world(&self, scene: &SceneDesc) -> World {
+        let objects: Vec<WorldObject> = (self.objects.iter())
+            .map(|object| {
+                let mesh = &scene.meshes[object.mesh];
+                WorldObject {
+                    positions: &mesh.positions,
+                    triangles: &mesh.triangles,
+                    to_render: object.to_render,
+                    dynamic: object.dynamic,
+                }
+            })
+            .collect();
+        World::build(&objects)
+    }
+
     /// Places `scene` at `pose` relative to `anchor`.
     pub fn place(
         scene: &SceneDesc,

@@ -32,12 +32,13 @@ pub use trace::RayQueries;
 
 use super::band::{bands, resolve, shaded_value};
 use super::sampling::{film_position, lamp_sample};
-use super::{thread_pool, BackendError, RenderError, Shading};
+use super::{thread_pool, BackendError, RenderError};
 use crate::accel::{Hit, Ray};
 use crate::output::Image;
 use crate::render::scatter::secondary_rays;
 use crate::render::surface::ShadingPoint;
 use crate::render::{area, FrameJob};
+use crate::settings::Method;
 use crate::stats::FrameStats;
 
 /// Points whose lamp samples go to the GPU together (`--method area`): at
@@ -112,7 +113,7 @@ impl GpuBackend {
     pub fn render(
         &mut self,
         job: &FrameJob,
-        shading: &mut Shading,
+        method: Method,
         stats: &mut FrameStats,
     ) -> Result<Image, RenderError> {
         let start = Instant::now();
@@ -127,15 +128,13 @@ impl GpuBackend {
             scene,
             lights,
         };
-        let shading = match shading {
-            Shading::Whitted => DeferredShading::Whitted,
-            Shading::Area => DeferredShading::Area,
-            Shading::LightMesh { .. } => return Err(GpuError::LightMeshOnGpu.into()),
-        };
+        if method.uses_light_mesh() {
+            return Err(GpuError::LightMeshOnGpu.into());
+        }
         self.pool.install(|| {
             let mut pixels = Vec::with_capacity((job.width * job.height) as usize);
             for rows in bands(job) {
-                pixels.extend(frame.render_band(rows, shading, stats)?);
+                pixels.extend(frame.render_band(rows, method, stats)?);
             }
             Ok(Image {
                 width: job.width,
@@ -152,13 +151,6 @@ pub struct GpuPasses<'a> {
     pub queries: &'a RayQueries,
     pub direct: &'a DirectLightPass,
     pub scene: &'a GpuScene,
-}
-
-/// The direct-light methods whose shadow segments the GPU traces.
-#[derive(Clone, Copy)]
-enum DeferredShading {
-    Whitted,
-    Area,
 }
 
 /// One frame's view of the backend.
@@ -184,7 +176,7 @@ impl Frame<'_> {
     fn render_band(
         &self,
         rows: std::ops::Range<u32>,
-        shading: DeferredShading,
+        method: Method,
         stats: &mut FrameStats,
     ) -> Result<Vec<Vec4>, GpuError> {
         let job = self.job;
@@ -225,7 +217,7 @@ impl Frame<'_> {
 
         let start = Instant::now();
         let band_start = rows.start as u64 * job.width as u64 * job.spp as u64;
-        let (direct, shadow_rays) = self.direct_light(&points, shading, band_start)?;
+        let (direct, shadow_rays) = self.direct_light(&points, method, band_start)?;
         let shaded: Vec<Vec3> = (points.par_iter().zip(&direct))
             .map(|(point, &light)| shaded_value(point, light))
             .collect();
@@ -286,20 +278,20 @@ impl Frame<'_> {
             .collect())
     }
 
-    /// Every point's direct light by `shading`, and the shadow segments
+    /// Every point's direct light by `method`, and the shadow segments
     /// traced.
     fn direct_light(
         &self,
         points: &[ShadingPoint],
-        shading: DeferredShading,
+        method: Method,
         band_start: u64,
     ) -> Result<(Vec<Vec3>, u64), GpuError> {
-        match shading {
-            DeferredShading::Whitted => {
-                self.direct
-                    .run(self.context, self.scene, &self.lights, points)
-            }
-            DeferredShading::Area => self.area_light(points, band_start),
+        match method {
+            Method::Whitted => self
+                .direct
+                .run(self.context, self.scene, &self.lights, points),
+            Method::Area => self.area_light(points, band_start),
+            Method::Lmm | Method::Lmm1 => Err(GpuError::LightMeshOnGpu),
         }
     }
 
