@@ -341,6 +341,23 @@ fn hard_points(
     points
 }
 
+/// Formula (1) at `points` on the GPU: each point's light, the segments
+/// traced, and whether the adapter rounds as the CPU does.
+fn gpu_direct_light(
+    gpu: &mut GpuBackend,
+    world: &World,
+    lights: &[RenderLight],
+    points: &[ShadingPoint],
+) -> (Vec<Vec3>, u64, bool) {
+    let passes = gpu.passes_for(world).expect("upload");
+    let frame_lights = FrameLights::upload(passes.context, lights).expect("lights");
+    let (light, rays) = passes
+        .direct
+        .run(passes.context, passes.scene, &frame_lights, points)
+        .expect("direct light");
+    (light, rays, passes.context.exact)
+}
+
 #[test]
 fn formula_one_on_the_gpu_gives_the_cpus_light_at_hard_points() {
     let Some(mut gpu) = gpu() else { return };
@@ -356,12 +373,7 @@ fn formula_one_on_the_gpu_gives_the_cpus_light_at_hard_points() {
         "the lights span more than one group of 32"
     );
     let points = hard_points(&positions, &triangles, &placements);
-    let passes = gpu.passes_for(&world).expect("upload");
-    let frame_lights = FrameLights::upload(passes.context, &lights).expect("lights");
-    let (gpu_light, gpu_rays) = passes
-        .direct
-        .run(passes.context, passes.scene, &frame_lights, &points)
-        .expect("direct light");
+    let (gpu_light, gpu_rays, exact) = gpu_direct_light(&mut gpu, &world, &lights, &points);
     let lanes = LightLanes::new(&lights);
     let (mut cpu_rays, mut lit, mut shadowed) = (0, 0, 0);
     for (point, gpu_value) in points.iter().zip(&gpu_light) {
@@ -369,7 +381,7 @@ fn formula_one_on_the_gpu_gives_the_cpus_light_at_hard_points() {
         cpu_rays += rays;
         lit += (cpu_value != Vec3::ZERO) as usize;
         shadowed += (rays > 0 && cpu_value == Vec3::ZERO) as usize;
-        if passes.context.exact {
+        if exact {
             assert_eq!(*gpu_value, cpu_value, "{point:?}");
         } else {
             let error = (*gpu_value - cpu_value).abs().max_element();
@@ -415,23 +427,18 @@ fn denormal_terms_are_the_cpus_or_flushed() {
         faint(1.0, DVec3::new(0.0, 0.0, 4.0)),
     ];
     let points = hard_points(&positions, &triangles, &placements);
-    let passes = gpu.passes_for(&world).expect("upload");
-    let frame_lights = FrameLights::upload(passes.context, &lights).expect("lights");
-    let (gpu_light, _) = passes
-        .direct
-        .run(passes.context, passes.scene, &frame_lights, &points)
-        .expect("direct light");
+    let (gpu_light, _, exact) = gpu_direct_light(&mut gpu, &world, &lights, &points);
     let lanes = LightLanes::new(&lights);
+    // What the faint lights alone bring.
+    let faint_only = LightLanes::new(&lights[..2]);
     let mut tiny = 0;
     for (point, gpu_value) in points.iter().zip(&gpu_light) {
         let (cpu_value, _) = whitted::direct_light(point, &lanes, &world);
-        // What the faint lights alone bring at most.
-        let faint_only = LightLanes::new(&lights[..2]);
         let (faint_value, _) = whitted::direct_light(point, &faint_only, &world);
         tiny +=
             (faint_value != Vec3::ZERO && faint_value.max_element() < f32::MIN_POSITIVE) as usize;
         let difference = (*gpu_value - cpu_value).abs().max_element();
-        if passes.context.exact {
+        if exact {
             assert!(
                 *gpu_value == cpu_value || difference <= f32::MIN_POSITIVE,
                 "{point:?}: {gpu_value} against {cpu_value}"
