@@ -1,8 +1,9 @@
 //! Backends run a frame's stages on some hardware, behind one seam:
 //! [`Backend`]. The CPU backend (rayon) is the reference and runs every
-//! method; the GPU backend (wgpu compute) runs the ray queries of the
-//! stages (primary and secondary hits, shadow segments) as compute passes
-//! and keeps the rest the CPU's, so its frames match the CPU's. The core
+//! method; the GPU backend (wgpu compute) runs the ray tracing of the
+//! stages (primary and secondary hits, formula (1) whole, the lamps'
+//! shadow segments) as compute passes that round as the CPU does, and
+//! keeps the rest the CPU's, so its frames match the CPU's. The core
 //! (scene, accel, render) never knows which one runs it.
 
 mod band;
