@@ -108,14 +108,17 @@ impl GpuBackend {
     }
 
     /// Renders one frame; stage times, ray and point counts go to `stats`.
-    /// The light-mesh methods are the CPU backend's (settings refuse them
-    /// here before a run starts).
+    /// The light-mesh methods are the CPU backend's: refused before any
+    /// upload (settings refuse them before a run starts).
     pub fn render(
         &mut self,
         job: &FrameJob,
         method: Method,
         stats: &mut FrameStats,
     ) -> Result<Image, RenderError> {
+        if method.uses_light_mesh() {
+            return Err(GpuError::LightMeshOnGpu.into());
+        }
         let start = Instant::now();
         let scene = Self::upload(&mut self.scene, &self.context, job.world)?;
         let lights = FrameLights::upload(&self.context, &job.frame.lights)?;
@@ -128,9 +131,6 @@ impl GpuBackend {
             scene,
             lights,
         };
-        if method.uses_light_mesh() {
-            return Err(GpuError::LightMeshOnGpu.into());
-        }
         self.pool.install(|| {
             let mut pixels = Vec::with_capacity((job.width * job.height) as usize);
             for rows in bands(job) {

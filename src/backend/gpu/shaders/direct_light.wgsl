@@ -191,7 +191,10 @@ fn shadowed(origin: vec3<f32>, light: Light) -> bool {
 // only, the same work in every invocation), then a segment for each of
 // those. Invocations that run side by side then trace their own k-th
 // segment together instead of waiting on each other's lights, and the
-// visible terms are still summed in light order.
+// visible terms are still summed in light order. Omega is evaluated again
+// for a visible light rather than kept from the first loop: 32 colours per
+// invocation would cost registers on every adapter, a second evaluation
+// only arithmetic.
 @compute @workgroup_size(64)
 fn direct_light(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
