@@ -23,9 +23,7 @@ pub struct Instance {
     /// Inverse of `to_render`; `None` while that is singular, and then the
     /// instance is hit by nothing.
     to_object: Option<Affine3A>,
-    /// Maps an object-space `(b - a) × (c - a)` to the direction of the
-    /// render-space cross product of the transformed edges: the cofactor matrix
-    /// `det(M) M^-T`, which keeps orientation under mirroring transforms.
+    /// [`cofactor_map`] of `to_render`.
     normal_to_render: Mat3,
     object_bounds: Bounds,
     /// Fixed clusters of `triangles`, to tell where a deformation changed
@@ -69,11 +67,10 @@ impl Instance {
     }
 
     pub fn set_transform(&mut self, to_render: Affine3A) {
-        let m = Mat3::from(to_render.matrix3);
-        let det = m.determinant();
+        let det = Mat3::from(to_render.matrix3).determinant();
         self.to_render = to_render;
         self.to_object = (det != 0.0 && to_render.is_finite()).then(|| to_render.inverse());
-        self.normal_to_render = m.inverse().transpose() * det;
+        self.normal_to_render = cofactor_map(&to_render);
     }
 
     /// New object-space positions (same count): refits when every kept
@@ -152,6 +149,15 @@ impl Instance {
         self.object_ray(ray)
             .is_some_and(|local| self.bvh.occluded(&local))
     }
+}
+
+/// The map from an object-space `(b - a) × (c - a)` to the direction of
+/// the cross product of the edges `to_render` places: the cofactor matrix
+/// `det(M) M^-T`, which keeps orientation under mirroring maps. The GPU's
+/// shading points turn an instance's normals with the same matrix.
+pub fn cofactor_map(to_render: &Affine3A) -> Mat3 {
+    let m = Mat3::from(to_render.matrix3);
+    m.inverse().transpose() * m.determinant()
 }
 
 /// A refittable BVH over the object's triangles in object space.

@@ -26,6 +26,7 @@ mod wide;
 pub mod world;
 
 pub use bounds::Bounds;
+pub use instance::cofactor_map;
 pub use offset::offset_ray_origin;
 pub use ray::Ray;
 pub use world::{Hit, MeshId, StaticTriangle, World, WorldError, WorldObject};

@@ -3,8 +3,10 @@
 
 use std::fmt;
 
-/// Storage buffers one pass binds at most: its items and answers, seven
-/// arrays of the flat world, and the lights of the direct-light pass.
+/// Storage buffers one pass binds at most: its items and answers, and
+/// eight more (the flat world's seven arrays and the lights for formula
+/// (1); hits, meshes, textures and the frame's placement for shading
+/// points).
 pub const STORAGE_BUFFERS: u32 = 10;
 
 #[derive(Debug, thiserror::Error)]

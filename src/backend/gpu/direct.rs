@@ -1,8 +1,9 @@
 //! Formula (1) on the GPU: each shading point's Omega for every light, its
-//! shadow segments and their sum, in one pass (`direct_light.wgsl`). The
-//! CPU makes the points and their BRDFs and uploads them; only a colour
-//! and a ray count per point come back, where the ray queries would move
-//! a segment and an answer per point and light.
+//! shadow segments and their sum, in one pass (`direct_light.wgsl`), over
+//! the points the shading-point pass left on the GPU (or points the CPU
+//! made and uploads). Only a colour and a ray count per point come back,
+//! where the ray queries would move a segment and an answer per point and
+//! light.
 //!
 //! The shader repeats the CPU's eight-lane Omega operation for operation,
 //! rounding as the CPU does where the adapter has f64, so a point gets the
@@ -15,53 +16,16 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::context::{GpuContext, GpuError};
-use super::pass::{WorldPass, BATCH};
+use super::pass::{WorldPass, WorldUse, BATCH, ITEMS};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
+use super::surface::{LevelBuffers, SurfacePoint};
 use crate::render::light::RenderLight;
 use crate::render::omega::OmegaLight;
 use crate::render::surface::ShadingPoint;
 
 /// The binding of the frame's lights.
 const LIGHTS: u32 = 10;
-
-/// `direct_light.wgsl`'s `ShadePoint`: the point and its `PointBrdf`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct ShadePoint {
-    position: [f32; 3],
-    n_dot_v: f32,
-    geometric_normal: [f32; 3],
-    alpha2: f32,
-    normal: [f32; 3],
-    view_smith: f32,
-    view: [f32; 3],
-    metallic: f32,
-    diffuse: [f32; 3],
-    specular: f32,
-    base_color: [f32; 3],
-    dielectric_f0: f32,
-}
-
-impl From<&ShadingPoint> for ShadePoint {
-    fn from(point: &ShadingPoint) -> ShadePoint {
-        let brdf = point.brdf();
-        ShadePoint {
-            position: point.position.to_array(),
-            n_dot_v: brdf.n_dot_v,
-            geometric_normal: point.geometric_normal.to_array(),
-            alpha2: brdf.alpha2,
-            normal: brdf.n.to_array(),
-            view_smith: brdf.view_smith,
-            view: brdf.v.to_array(),
-            metallic: brdf.metallic,
-            diffuse: brdf.diffuse.to_array(),
-            specular: brdf.specular,
-            base_color: brdf.base_color.to_array(),
-            dielectric_f0: brdf.dielectric_f0,
-        }
-    }
-}
 
 /// `direct_light.wgsl`'s `Light`: an [`OmegaLight`] whose missing range is
 /// 0 rather than infinite, so the shader needs no infinities.
@@ -106,6 +70,16 @@ pub struct DirectLight {
     shadow_rays: u32,
 }
 
+impl DirectLight {
+    pub fn radiance(&self) -> Vec3 {
+        Vec3::from_array(self.radiance)
+    }
+
+    pub fn shadow_rays(&self) -> u64 {
+        self.shadow_rays as u64
+    }
+}
+
 /// A frame's lights, uploaded once for all its batches.
 pub struct FrameLights {
     buffer: wgpu::Buffer,
@@ -130,8 +104,24 @@ pub struct DirectLightPass {
 impl DirectLightPass {
     pub fn new(context: &GpuContext) -> DirectLightPass {
         DirectLightPass {
-            pass: WorldPass::new(context, Entry::DirectLight, &[LIGHTS]),
+            pass: WorldPass::new(context, Entry::DirectLight, WorldUse::Traces, &[LIGHTS]),
         }
+    }
+
+    /// Records formula (1) at each of `level`'s shading points into
+    /// `direct` (zero for rays that hit nothing).
+    pub fn record(
+        &self,
+        context: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        lights: &FrameLights,
+        level: &LevelBuffers,
+        direct: &wgpu::Buffer,
+    ) {
+        let reads = [(ITEMS, &level.points), (LIGHTS, &lights.buffer)];
+        let count = level.count;
+        (self.pass).record(context, encoder, scene, count, lights.count, &reads, direct);
     }
 
     /// Formula (1) at each of `points`, in order, and the shadow segments
@@ -146,7 +136,7 @@ impl DirectLightPass {
         let mut radiance = Vec::with_capacity(points.len());
         let mut shadow_rays = 0;
         for batch in points.chunks(BATCH) {
-            let items: Vec<ShadePoint> = batch.par_iter().map(ShadePoint::from).collect();
+            let items: Vec<SurfacePoint> = batch.par_iter().map(SurfacePoint::from).collect();
             let answers: Vec<DirectLight> = self.pass.run(
                 context,
                 scene,
@@ -155,8 +145,8 @@ impl DirectLightPass {
                 lights.count,
             )?;
             for answer in answers {
-                radiance.push(Vec3::from_array(answer.radiance));
-                shadow_rays += answer.shadow_rays as u64;
+                radiance.push(answer.radiance());
+                shadow_rays += answer.shadow_rays();
             }
         }
         Ok((radiance, shadow_rays))

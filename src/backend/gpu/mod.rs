@@ -1,23 +1,25 @@
 //! The GPU backend (wgpu): the frame's stages as the CPU backend runs
-//! them, with the ray tracing as compute passes over the uploaded world:
-//! closest hits for the camera's samples and the Whitted recursion level
-//! by level ([`trace`]), formula (1) whole — Omega, shadow segments and
-//! their sum — in one pass ([`direct`]), and the shadow segments of
-//! `--method area`. Making rays, completing hits into shading points,
-//! sampling lamps and resolve stay the CPU's code on the CPU's threads.
+//! them, with the work per ray and per point as compute passes over the
+//! uploaded world. Each level of the Whitted recursion (the camera's
+//! samples, then the reflected and refracted rays level by level) is one
+//! submission: closest hits ([`trace`]), shading points made from them
+//! with the scene's meshes, materials and textures ([`surface`]), and,
+//! for `--method whitted`, formula (1) whole — Omega, shadow segments and
+//! their sum — over those points where they lie ([`direct`]). The points
+//! and their direct light come back once. Making rays (camera samples and
+//! the recursion's), sampling lamps for `--method area` (whose shadow
+//! segments go back to the GPU) and resolve stay the CPU's code.
+//!
 //! The passes round as the CPU does, so a frame differs from the CPU
 //! backend's only where a query answers differently, and tests compare
-//! exactly that, ray by ray and frame by frame.
-//!
-//! Stages wait for their pass's answers (a readback per batch). Making
-//! shading points on the GPU too is what a real GPU needs next for speed
-//! (see BENCHMARKS.md).
+//! exactly that: ray by ray, point by point and frame by frame.
 
 mod context;
 pub(crate) mod direct;
 mod pass;
 pub(crate) mod scene;
 mod shaders;
+pub(crate) mod surface;
 pub(crate) mod trace;
 
 use std::time::Instant;
@@ -33,13 +35,16 @@ pub use trace::RayQueries;
 use super::band::{bands, resolve, shaded_value};
 use super::sampling::{film_position, lamp_sample};
 use super::{thread_pool, BackendError, RenderError};
-use crate::accel::{Hit, Ray};
+use crate::accel::{Ray, World};
 use crate::output::Image;
 use crate::render::scatter::secondary_rays;
 use crate::render::surface::ShadingPoint;
 use crate::render::{area, FrameJob};
 use crate::settings::Method;
 use crate::stats::FrameStats;
+use direct::DirectLight;
+use pass::{answer_buffer, read_back, BATCH};
+use surface::{FrameSurfaces, LevelBuffers, PathRay, SceneSurfaces, SurfacePass, SurfacePoint};
 
 /// Points whose lamp samples go to the GPU together (`--method area`): at
 /// 64 lights, about a million segments.
@@ -49,9 +54,13 @@ pub struct GpuBackend {
     pool: rayon::ThreadPool,
     context: GpuContext,
     queries: RayQueries,
+    surfaces: SurfacePass,
     direct: DirectLightPass,
     /// The last world rendered, as uploaded.
     scene: Option<GpuScene>,
+    /// Its scene's meshes and textures, and the world they were uploaded
+    /// with.
+    scene_surfaces: Option<(u64, SceneSurfaces)>,
 }
 
 impl GpuBackend {
@@ -59,14 +68,14 @@ impl GpuBackend {
     /// make rays and shade.
     pub fn new(threads: Option<usize>) -> Result<GpuBackend, BackendError> {
         let context = GpuContext::new()?;
-        let queries = RayQueries::new(&context);
-        let direct = DirectLightPass::new(&context);
         Ok(GpuBackend {
             pool: thread_pool(threads)?,
+            queries: RayQueries::new(&context),
+            surfaces: SurfacePass::new(&context),
+            direct: DirectLightPass::new(&context),
             context,
-            queries,
-            direct,
             scene: None,
+            scene_surfaces: None,
         })
     }
 
@@ -81,7 +90,7 @@ impl GpuBackend {
 
     /// The passes and `world` as uploaded, for running them outside a
     /// frame (tests, benchmarks).
-    pub fn passes_for(&mut self, world: &crate::accel::World) -> Result<GpuPasses<'_>, GpuError> {
+    pub fn passes_for(&mut self, world: &World) -> Result<GpuPasses<'_>, GpuError> {
         let scene = Self::upload(&mut self.scene, &self.context, world)?;
         Ok(GpuPasses {
             context: &self.context,
@@ -96,7 +105,7 @@ impl GpuBackend {
     fn upload<'s>(
         scene: &'s mut Option<GpuScene>,
         context: &GpuContext,
-        world: &crate::accel::World,
+        world: &World,
     ) -> Result<&'s GpuScene, GpuError> {
         match scene {
             Some(scene) => {
@@ -105,6 +114,36 @@ impl GpuBackend {
             }
             None => Ok(scene.insert(GpuScene::upload(context, world)?)),
         }
+    }
+
+    /// Uploads what `job`'s frame needs that the GPU does not hold yet:
+    /// the world as it moved, the scene's meshes and textures for a new
+    /// world, and the frame's lights and placement; then the frame's view
+    /// of the backend.
+    fn frame<'a>(&'a mut self, job: &'a FrameJob<'a>) -> Result<Frame<'a>, GpuError> {
+        let context = &self.context;
+        Self::upload(&mut self.scene, context, job.world)?;
+        let world = job.world.id();
+        if self.scene_surfaces.as_ref().map(|(id, _)| *id) != Some(world) {
+            self.scene_surfaces = Some((world, SceneSurfaces::upload(context, job.scene)?));
+        }
+        let frame_surfaces = FrameSurfaces::upload(context, job.frame)?;
+        let lights = FrameLights::upload(context, &job.frame.lights)?;
+        let (Some(scene), Some((_, scene_surfaces))) = (&self.scene, &self.scene_surfaces) else {
+            unreachable!("both were uploaded above");
+        };
+        Ok(Frame {
+            job,
+            pool: &self.pool,
+            context,
+            queries: &self.queries,
+            surfaces: &self.surfaces,
+            direct: &self.direct,
+            scene,
+            scene_surfaces,
+            frame_surfaces,
+            lights,
+        })
     }
 
     /// Renders one frame; stage times, ray and point counts go to `stats`.
@@ -120,18 +159,9 @@ impl GpuBackend {
             return Err(GpuError::LightMeshOnGpu.into());
         }
         let start = Instant::now();
-        let scene = Self::upload(&mut self.scene, &self.context, job.world)?;
-        let lights = FrameLights::upload(&self.context, &job.frame.lights)?;
+        let frame = self.frame(job)?;
         stats.add_stage_time("upload", start.elapsed().as_secs_f64());
-        let frame = Frame {
-            job,
-            context: &self.context,
-            queries: &self.queries,
-            direct: &self.direct,
-            scene,
-            lights,
-        };
-        self.pool.install(|| {
+        frame.pool.install(|| {
             let mut pixels = Vec::with_capacity((job.width * job.height) as usize);
             for rows in bands(job) {
                 pixels.extend(frame.render_band(rows, method, stats)?);
@@ -143,6 +173,26 @@ impl GpuBackend {
             })
         })
     }
+
+    /// The shading points of `rays`' closest hits as the GPU makes them
+    /// for `job`'s frame (None where a ray hits nothing), for comparing
+    /// with the CPU's.
+    pub fn shading_points(
+        &mut self,
+        job: &FrameJob,
+        rays: &[Ray],
+    ) -> Result<Vec<Option<ShadingPoint>>, GpuError> {
+        let paths: Vec<PathRay> = (rays.iter())
+            .map(|ray| PathRay::new(ray, 0, Vec3::ONE, 0))
+            .collect();
+        let frame = self.frame(job)?;
+        let mut points = Vec::with_capacity(rays.len());
+        for batch in paths.chunks(BATCH) {
+            let (records, _) = frame.trace_batch(batch, false)?;
+            points.extend(records.iter().map(SurfacePoint::shading_point));
+        }
+        Ok(points)
+    }
 }
 
 /// The backend's passes over one uploaded world.
@@ -153,23 +203,35 @@ pub struct GpuPasses<'a> {
     pub scene: &'a GpuScene,
 }
 
-/// One frame's view of the backend.
+/// One frame's view of the backend, with the frame's uploads.
 struct Frame<'a> {
     job: &'a FrameJob<'a>,
+    pool: &'a rayon::ThreadPool,
     context: &'a GpuContext,
     queries: &'a RayQueries,
+    surfaces: &'a SurfacePass,
     direct: &'a DirectLightPass,
     scene: &'a GpuScene,
+    scene_surfaces: &'a SceneSurfaces,
+    frame_surfaces: FrameSurfaces,
     lights: FrameLights,
 }
 
-/// Where a ray's hit goes: the sample it belongs to, its path weight, its
-/// recursion depth.
-#[derive(Clone, Copy)]
-struct PathVertex {
-    sample: u32,
-    weight: Vec3,
-    depth: u32,
+/// A level's shading points and, for `--method whitted`, their direct
+/// light and the shadow segments it took.
+#[derive(Default)]
+struct Level {
+    points: Vec<ShadingPoint>,
+    direct: Vec<Vec3>,
+    shadow_rays: u64,
+}
+
+impl Level {
+    fn extend(&mut self, other: Level) {
+        self.points.extend(other.points);
+        self.direct.extend(other.direct);
+        self.shadow_rays += other.shadow_rays;
+    }
 }
 
 impl Frame<'_> {
@@ -181,59 +243,59 @@ impl Frame<'_> {
     ) -> Result<Vec<Vec4>, GpuError> {
         let job = self.job;
         let band_samples = ((rows.end - rows.start) * job.width * job.spp) as usize;
+        let whitted = method == Method::Whitted;
 
         let start = Instant::now();
-        let (rays, vertices) = self.camera_rays(rows.clone());
-        let mut points = self.trace(&rays, &vertices)?;
-        let primary = points.len();
-        stats.rays.primary += rays.len() as u64;
+        let paths = self.camera_paths(rows.clone());
+        let mut shaded = self.trace(&paths, whitted)?;
+        let primary = shaded.points.len();
+        stats.rays.primary += paths.len() as u64;
         stats.add_stage_time("primary", start.elapsed().as_secs_f64());
 
         let start = Instant::now();
-        let mut frontier = 0..points.len();
+        let mut frontier = 0..primary;
         for _ in 0..job.max_depth {
-            let (rays, vertices): (Vec<Ray>, Vec<PathVertex>) = points[frontier.clone()]
+            let paths: Vec<PathRay> = shaded.points[frontier.clone()]
                 .iter()
                 .flat_map(|point| {
                     secondary_rays(point).map(|secondary| {
-                        let vertex = PathVertex {
-                            sample: point.sample,
-                            weight: secondary.weight,
-                            depth: point.depth + 1,
-                        };
-                        (secondary.ray, vertex)
+                        let depth = point.depth + 1;
+                        PathRay::new(&secondary.ray, point.sample, secondary.weight, depth)
                     })
                 })
-                .unzip();
-            stats.rays.secondary += rays.len() as u64;
-            let next = self.trace(&rays, &vertices)?;
-            if next.is_empty() {
+                .collect();
+            stats.rays.secondary += paths.len() as u64;
+            let next = self.trace(&paths, whitted)?;
+            if next.points.is_empty() {
                 break;
             }
-            frontier = points.len()..points.len() + next.len();
-            points.extend(next);
+            frontier = shaded.points.len()..shaded.points.len() + next.points.len();
+            shaded.extend(next);
         }
         stats.add_stage_time("secondary", start.elapsed().as_secs_f64());
 
         let start = Instant::now();
-        let band_start = rows.start as u64 * job.width as u64 * job.spp as u64;
-        let (direct, shadow_rays) = self.direct_light(&points, method, band_start)?;
-        let shaded: Vec<Vec3> = (points.par_iter().zip(&direct))
+        if !whitted {
+            let band_start = rows.start as u64 * job.width as u64 * job.spp as u64;
+            (shaded.direct, shaded.shadow_rays) = self.area_light(&shaded.points, band_start)?;
+        }
+        let points = &shaded.points;
+        let values: Vec<Vec3> = (points.par_iter().zip(&shaded.direct))
             .map(|(point, &light)| shaded_value(point, light))
             .collect();
-        stats.rays.shadow += shadow_rays;
+        stats.rays.shadow += shaded.shadow_rays;
         stats.shading_points += points.len() as u64;
         stats.add_stage_time("shade", start.elapsed().as_secs_f64());
 
         let start = Instant::now();
-        let pixels = resolve(job, band_samples, &points, primary, &shaded);
+        let pixels = resolve(job, band_samples, points, primary, &values);
         stats.add_stage_time("resolve", start.elapsed().as_secs_f64());
         Ok(pixels)
     }
 
     /// The camera rays of every sample in the band, in sample order, made
     /// exactly as the CPU backend makes them.
-    fn camera_rays(&self, rows: std::ops::Range<u32>) -> (Vec<Ray>, Vec<PathVertex>) {
+    fn camera_paths(&self, rows: std::ops::Range<u32>) -> Vec<PathRay> {
         let job = self.job;
         let (width, spp) = (job.width, job.spp);
         (rows.start..rows.end)
@@ -243,56 +305,81 @@ impl Frame<'_> {
                     (0..spp).map(move |s| {
                         let film = film_position(UVec2::new(x, y), width, s, spp);
                         let ray = job.frame.camera.primary_ray(film, width, job.height);
-                        let vertex = PathVertex {
-                            sample: ((y - rows.start) * width + x) * spp + s,
-                            weight: Vec3::ONE,
-                            depth: 0,
-                        };
-                        (ray, vertex)
+                        let sample = ((y - rows.start) * width + x) * spp + s;
+                        PathRay::new(&ray, sample, Vec3::ONE, 0)
                     })
                 })
             })
-            .unzip()
+            .collect()
     }
 
-    /// Closest hits of `rays` on the GPU, made into shading points in ray
-    /// order (misses dropped).
-    fn trace(&self, rays: &[Ray], vertices: &[PathVertex]) -> Result<Vec<ShadingPoint>, GpuError> {
-        let job = self.job;
-        let hits: Vec<Option<Hit>> =
-            self.queries
-                .closest_hits(self.context, self.scene, job.world, rays)?;
-        Ok((hits.par_iter().zip(rays).zip(vertices))
-            .filter_map(|((hit, ray), vertex)| {
-                let hit = hit.as_ref()?;
-                Some(ShadingPoint::from_hit(
-                    job.scene,
-                    job.frame,
-                    ray,
-                    hit,
-                    vertex.sample,
-                    vertex.weight,
-                    vertex.depth,
-                ))
-            })
-            .collect())
-    }
-
-    /// Every point's direct light by `method`, and the shadow segments
-    /// traced.
-    fn direct_light(
-        &self,
-        points: &[ShadingPoint],
-        method: Method,
-        band_start: u64,
-    ) -> Result<(Vec<Vec3>, u64), GpuError> {
-        match method {
-            Method::Whitted => self
-                .direct
-                .run(self.context, self.scene, &self.lights, points),
-            Method::Area => self.area_light(points, band_start),
-            Method::Lmm | Method::Lmm1 => Err(GpuError::LightMeshOnGpu),
+    /// One level of paths on the GPU: their shading points in ray order
+    /// (misses dropped) and, `with_direct`, formula (1) at each.
+    fn trace(&self, paths: &[PathRay], with_direct: bool) -> Result<Level, GpuError> {
+        let mut level = Level::default();
+        for batch in paths.chunks(BATCH) {
+            let (records, direct) = self.trace_batch(batch, with_direct)?;
+            for (index, record) in records.iter().enumerate() {
+                let Some(point) = record.shading_point() else {
+                    continue;
+                };
+                level.points.push(point);
+                if let Some(answer) = direct.get(index) {
+                    level.direct.push(answer.radiance());
+                    level.shadow_rays += answer.shadow_rays();
+                }
+            }
         }
+        Ok(level)
+    }
+
+    /// Closest hits, shading points and (`with_direct`) formula (1) for at
+    /// most [`BATCH`] paths in one submission; the points and the direct
+    /// light come back.
+    fn trace_batch(
+        &self,
+        paths: &[PathRay],
+        with_direct: bool,
+    ) -> Result<(Vec<SurfacePoint>, Vec<DirectLight>), GpuError> {
+        let context = self.context;
+        context.checked("tracing a level of paths", || {
+            let level = LevelBuffers::new(context, paths)?;
+            let mut encoder = context.device.create_command_encoder(&Default::default());
+            (self.queries).record_closest(context, &mut encoder, self.scene, &level);
+            self.surfaces.record(
+                context,
+                &mut encoder,
+                self.scene,
+                self.scene_surfaces,
+                &self.frame_surfaces,
+                &level,
+            );
+            let direct = match with_direct {
+                true => {
+                    let direct =
+                        answer_buffer::<DirectLight>(context, "direct light", paths.len())?;
+                    (self.direct).record(
+                        context,
+                        &mut encoder,
+                        self.scene,
+                        &self.lights,
+                        &level,
+                        &direct,
+                    );
+                    Some(direct)
+                }
+                false => None,
+            };
+            let points = read_back(context, encoder, &level.points, paths.len())?;
+            let direct = match direct {
+                Some(direct) => {
+                    let encoder = context.device.create_command_encoder(&Default::default());
+                    read_back(context, encoder, &direct, paths.len())?
+                }
+                None => Vec::new(),
+            };
+            Ok((points, direct))
+        })
     }
 
     /// `--method area`: each point's lamp samples are made on the CPU in

@@ -1,8 +1,10 @@
-//! One compute pass over the uploaded world, end to end: the pass's items
-//! (binding 1) and any further inputs bound beside the world's arrays, one
-//! invocation per item, and an answer per item read back in item order.
-//! The ray queries and the direct-light pass differ only in what they bind
-//! and what they answer.
+//! One compute pass, end to end: its pipeline and bind group layout, its
+//! dispatch recorded into a command encoder (one invocation per item), and
+//! the answers read back. A pass reads its items (binding 1), optionally
+//! the uploaded world's arrays, and further read-only arrays, and writes
+//! one answer per item (binding 7). Passes that feed each other are
+//! recorded into one encoder and their intermediate answers never leave
+//! the GPU; [`WorldPass::run`] is the round trip for a single pass.
 
 use bytemuck::Pod;
 use wgpu::util::DeviceExt;
@@ -18,20 +20,32 @@ const WORKGROUP: u32 = 64;
 pub const BATCH: usize = 1 << 20;
 
 /// The binding of a pass's items; its answers go to [`ANSWERS`].
-const ITEMS: u32 = 1;
+pub const ITEMS: u32 = 1;
 const ANSWERS: u32 = 7;
+
+/// A buffer bound at a binding number.
+pub type Bound<'a> = (u32, &'a wgpu::Buffer);
+
+/// Whether a pass binds the uploaded world's arrays (the ray queries and
+/// formula (1) trace; making shading points does not).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WorldUse {
+    Traces,
+    None,
+}
 
 /// A compute pipeline and its bind group layout.
 pub struct WorldPass {
     entry: Entry,
+    world: WorldUse,
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
 }
 
 impl WorldPass {
-    /// The pipeline of `entry`, binding the world, its items, its answers
-    /// and the read-only arrays at `inputs`.
-    pub fn new(context: &GpuContext, entry: Entry, inputs: &[u32]) -> WorldPass {
+    /// The pipeline of `entry`, binding its items, its answers, the world
+    /// as `world` says and the read-only arrays at `reads`.
+    pub fn new(context: &GpuContext, entry: Entry, world: WorldUse, reads: &[u32]) -> WorldPass {
         let device = &context.device;
         let buffer = |binding, ty| wgpu::BindGroupLayoutEntry {
             binding,
@@ -52,8 +66,12 @@ impl WorldPass {
                 wgpu::BufferBindingType::Storage { read_only: false },
             ),
         ];
-        let world = GpuScene::BINDINGS.iter().chain(inputs);
-        entries.extend(world.map(|&binding| buffer(binding, read_only)));
+        let world_bindings: &[u32] = match world {
+            WorldUse::Traces => &GpuScene::BINDINGS,
+            WorldUse::None => &[],
+        };
+        let bindings = world_bindings.iter().chain(reads);
+        entries.extend(bindings.map(|&binding| buffer(binding, read_only)));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some(entry.name()),
             entries: &entries,
@@ -82,63 +100,41 @@ impl WorldPass {
         });
         WorldPass {
             entry,
+            world,
             layout,
             pipeline,
         }
     }
 
-    /// Runs the pass over `items` (at most [`BATCH`]) with `inputs` bound
-    /// as [`WorldPass::new`] declared them, `light_count` lights; one
-    /// `Answer` per item.
-    pub fn run<Item: Pod, Answer: Pod>(
+    /// Records the pass over `count` items (at most [`BATCH`]) into
+    /// `encoder`, with `reads` bound (the items at [`ITEMS`] among them),
+    /// `light_count` lights, and the answers written to `answers`.
+    pub fn record(
         &self,
         context: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
         scene: &GpuScene,
-        items: &[Item],
-        inputs: &[(u32, &wgpu::Buffer)],
+        count: usize,
         light_count: u32,
-    ) -> Result<Vec<Answer>, GpuError> {
-        debug_assert!(items.len() <= BATCH);
-        context.checked(self.entry.name(), || {
-            self.dispatch(context, scene, items, inputs, light_count)
-        })
-    }
-
-    fn dispatch<Item: Pod, Answer: Pod>(
-        &self,
-        context: &GpuContext,
-        scene: &GpuScene,
-        items: &[Item],
-        inputs: &[(u32, &wgpu::Buffer)],
-        light_count: u32,
-    ) -> Result<Vec<Answer>, GpuError> {
+        reads: &[Bound],
+        answers: &wgpu::Buffer,
+    ) {
+        debug_assert!(count <= BATCH);
         let device = &context.device;
-        let params = scene.params(items.len() as u32, light_count);
+        let params = scene.params(count as u32, light_count);
         let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("pass params"),
             contents: bytemuck::bytes_of(&params),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let item_buffer = super::scene::storage(context, "pass items", items)?;
-        let answer_bytes = (items.len().max(1) * size_of::<Answer>()) as u64;
-        context.check_binding("pass answers", answer_bytes)?;
-        let answers = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("pass answers"),
-            size: answer_bytes,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let readback = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("pass readback"),
-            size: answer_bytes,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let own = [(0, &params), (ITEMS, &item_buffer), (ANSWERS, &answers)];
-        let entries: Vec<wgpu::BindGroupEntry> = own
+        let world = match self.world {
+            WorldUse::Traces => scene.buffers().to_vec(),
+            WorldUse::None => Vec::new(),
+        };
+        let entries: Vec<wgpu::BindGroupEntry> = [(0, &params), (ANSWERS, answers)]
             .into_iter()
-            .chain(inputs.iter().copied())
-            .chain(scene.buffers())
+            .chain(reads.iter().copied())
+            .chain(world)
             .map(|(binding, buffer)| wgpu::BindGroupEntry {
                 binding,
                 resource: buffer.as_entire_binding(),
@@ -149,26 +145,81 @@ impl WorldPass {
             layout: &self.layout,
             entries: &entries,
         });
-        let mut encoder = device.create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &bind_group, &[]);
-            pass.dispatch_workgroups((items.len() as u32).div_ceil(WORKGROUP), 1, 1);
-        }
-        encoder.copy_buffer_to_buffer(&answers, 0, &readback, 0, answer_bytes);
-        context.queue.submit([encoder.finish()]);
-        read_back(context, &readback, items.len())
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.dispatch_workgroups((count as u32).div_ceil(WORKGROUP), 1, 1);
+    }
+
+    /// Runs the pass over `items` (at most [`BATCH`]) with `inputs` bound
+    /// as [`WorldPass::new`] declared them, `light_count` lights; one
+    /// `Answer` per item.
+    pub fn run<Item: Pod, Answer: Pod>(
+        &self,
+        context: &GpuContext,
+        scene: &GpuScene,
+        items: &[Item],
+        inputs: &[Bound],
+        light_count: u32,
+    ) -> Result<Vec<Answer>, GpuError> {
+        context.checked(self.entry.name(), || {
+            let items_buffer = super::scene::storage(context, "pass items", items)?;
+            let answers = answer_buffer::<Answer>(context, "pass answers", items.len())?;
+            let mut encoder = context.device.create_command_encoder(&Default::default());
+            let reads: Vec<Bound> = [(ITEMS, &items_buffer)]
+                .into_iter()
+                .chain(inputs.iter().copied())
+                .collect();
+            self.record(
+                context,
+                &mut encoder,
+                scene,
+                items.len(),
+                light_count,
+                &reads,
+                &answers,
+            );
+            read_back(context, encoder, &answers, items.len())
+        })
     }
 }
 
-/// Waits for `buffer` and copies its first `count` items out.
-fn read_back<Out: Pod>(
+/// A storage buffer for `count` answers of type `Answer` (one at least:
+/// a binding cannot be empty), which a later pass may read and
+/// [`read_back`] may copy out.
+pub fn answer_buffer<Answer: Pod>(
     context: &GpuContext,
+    what: &'static str,
+    count: usize,
+) -> Result<wgpu::Buffer, GpuError> {
+    let bytes = (count.max(1) * size_of::<Answer>()) as u64;
+    context.check_binding(what, bytes)?;
+    Ok(context.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(what),
+        size: bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    }))
+}
+
+/// Submits `encoder` with a copy of `buffer`'s first `count` items added,
+/// waits, and returns them.
+pub fn read_back<Out: Pod>(
+    context: &GpuContext,
+    mut encoder: wgpu::CommandEncoder,
     buffer: &wgpu::Buffer,
     count: usize,
 ) -> Result<Vec<Out>, GpuError> {
-    let slice = buffer.slice(..);
+    let bytes = (count.max(1) * size_of::<Out>()) as u64;
+    let staging = context.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size: bytes,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
+    context.queue.submit([encoder.finish()]);
+    let slice = staging.slice(..);
     let (sender, receiver) = std::sync::mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |result| {
         let _ = sender.send(result);

@@ -11,28 +11,41 @@ pub enum Arithmetic {
     PlainF32,
 }
 
-/// The compute entry points: the two ray queries and formula (1).
+/// The compute entry points: the two ray queries, shading points and
+/// formula (1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Entry {
     ClosestHit,
     AnyHit,
+    Surface,
     DirectLight,
 }
 
 impl Entry {
     #[cfg(test)]
-    pub const ALL: [Entry; 3] = [Entry::ClosestHit, Entry::AnyHit, Entry::DirectLight];
+    pub const ALL: [Entry; 4] = [
+        Entry::ClosestHit,
+        Entry::AnyHit,
+        Entry::Surface,
+        Entry::DirectLight,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             Entry::ClosestHit => "closest_hit",
             Entry::AnyHit => "any_hit",
+            Entry::Surface => "surface",
             Entry::DirectLight => "direct_light",
         }
     }
 }
 
-const SHARED: [&str; 3] = [
+const COMMON: &str = include_str!("shaders/common.wgsl");
+const VECTOR: &str = include_str!("shaders/vector.wgsl");
+const PATH: &str = include_str!("shaders/path.wgsl");
+const SURFACE_POINT: &str = include_str!("shaders/surface_point.wgsl");
+/// What the passes that trace share: the world and its traversal.
+const TRACING: [&str; 3] = [
     include_str!("shaders/scene.wgsl"),
     include_str!("shaders/triangle.wgsl"),
     include_str!("shaders/traverse.wgsl"),
@@ -44,16 +57,38 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
         Arithmetic::ExactF64 => include_str!("shaders/exact_f64.wgsl"),
         Arithmetic::PlainF32 => include_str!("shaders/exact_f32.wgsl"),
     };
-    let rays = include_str!("shaders/rays.wgsl");
-    let own: &[&str] = match entry {
-        Entry::ClosestHit => &[rays, include_str!("shaders/closest_hit.wgsl")],
-        Entry::AnyHit => &[rays, include_str!("shaders/occluded.wgsl")],
-        Entry::DirectLight => &[include_str!("shaders/direct_light.wgsl")],
+    let (tracing, own): (&[&str], &[&str]) = match entry {
+        Entry::ClosestHit => (&TRACING, &[PATH, include_str!("shaders/closest_hit.wgsl")]),
+        Entry::AnyHit => (
+            &TRACING,
+            &[
+                include_str!("shaders/rays.wgsl"),
+                include_str!("shaders/occluded.wgsl"),
+            ],
+        ),
+        Entry::Surface => (
+            &[],
+            &[
+                VECTOR,
+                PATH,
+                SURFACE_POINT,
+                include_str!("shaders/surface.wgsl"),
+            ],
+        ),
+        Entry::DirectLight => (
+            &TRACING,
+            &[
+                VECTOR,
+                SURFACE_POINT,
+                include_str!("shaders/direct_light.wgsl"),
+            ],
+        ),
     };
-    [prelude]
-        .into_iter()
-        .chain(SHARED)
-        .chain(own.iter().copied())
+    [prelude, COMMON]
+        .iter()
+        .chain(tracing)
+        .chain(own)
+        .copied()
         .collect::<Vec<_>>()
         .join("\n")
 }
@@ -88,8 +123,11 @@ mod tests {
     #[test]
     fn wgsl_structs_match_the_uploaded_records() {
         use crate::accel::flat::{FlatBinaryNode, FlatInstance, FlatWideNode};
-        use crate::backend::gpu::direct::{DirectLight, FlatLight, ShadePoint};
+        use crate::backend::gpu::direct::{DirectLight, FlatLight};
         use crate::backend::gpu::scene::Params;
+        use crate::backend::gpu::surface::{
+            MaterialRecord, MeshRecord, ObjectRecord, PathRay, SurfacePoint, TextureRecord,
+        };
         use crate::backend::gpu::trace::{GpuRay, HitRecord};
         let modules: Vec<naga::Module> = Entry::ALL
             .iter()
@@ -118,11 +156,38 @@ mod tests {
                 vec![0, 64, 68, 72, 76],
             ),
             ("Ray", size_of::<GpuRay>(), vec![0, 12, 16, 28]),
-            ("HitRecord", size_of::<HitRecord>(), vec![0, 4, 8, 12, 16]),
             (
-                "ShadePoint",
-                size_of::<ShadePoint>(),
-                vec![0, 12, 16, 28, 32, 44, 48, 60, 64, 76, 80, 92],
+                "HitRecord",
+                size_of::<HitRecord>(),
+                vec![0, 4, 8, 12, 16, 20, 24, 28],
+            ),
+            ("PathRay", size_of::<PathRay>(), vec![0, 12, 16, 28, 32, 44]),
+            (
+                "SurfacePoint",
+                size_of::<SurfacePoint>(),
+                vec![
+                    0, 12, 16, 28, 32, 44, 48, 60, 64, 76, 80, 92, 96, 108, 112, 116, 120, 124,
+                ],
+            ),
+            (
+                "MeshRecord",
+                size_of::<MeshRecord>(),
+                vec![0, 4, 8, 12, 16, 20, 24, 28, 32, 36, 40, 44],
+            ),
+            (
+                "TextureRecord",
+                size_of::<TextureRecord>(),
+                vec![0, 4, 8, 12, 16, 20, 24, 28],
+            ),
+            (
+                "ObjectRecord",
+                size_of::<ObjectRecord>(),
+                vec![0, 64, 112, 160, 164, 168, 172],
+            ),
+            (
+                "MaterialRecord",
+                size_of::<MaterialRecord>(),
+                vec![0, 16, 28, 32, 36, 40, 44, 48, 52, 56, 60],
             ),
             (
                 "Light",

@@ -1,16 +1,17 @@
 //! The GPU's ray queries: closest hits and any-hit (shadow) tests of a
 //! batch of render-space rays against the uploaded world, one compute
 //! invocation per ray. Rays go up as the CPU made them and answers come
-//! back in the same order, so every stage around a query stays the CPU's
-//! own code and the two backends differ only where a query does.
+//! back in the same order, or (closest hits of path rays) stay on the GPU
+//! for the shading-point pass.
 
 use bytemuck::{Pod, Zeroable};
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 
 use super::context::{GpuContext, GpuError};
-use super::pass::{WorldPass, BATCH};
+use super::pass::{WorldPass, WorldUse, BATCH, ITEMS};
 use super::scene::GpuScene;
 use super::shaders::Entry;
+use super::surface::{LevelBuffers, PathRay};
 use crate::accel::{Hit, MeshId, Ray, World};
 
 /// `rays.wgsl`'s `Ray`.
@@ -44,6 +45,10 @@ pub struct HitRecord {
     /// 0 for the static mesh, 1 + i for instance i, `u32::MAX` for none.
     pub mesh: u32,
     pub slot: u32,
+    /// The triangle's source, `(object, triangle)`.
+    pub object: u32,
+    pub triangle: u32,
+    pub _pad: u32,
 }
 
 impl HitRecord {
@@ -65,8 +70,8 @@ pub struct RayQueries {
 impl RayQueries {
     pub fn new(context: &GpuContext) -> RayQueries {
         RayQueries {
-            closest: WorldPass::new(context, Entry::ClosestHit, &[]),
-            any: WorldPass::new(context, Entry::AnyHit, &[]),
+            closest: WorldPass::new(context, Entry::ClosestHit, WorldUse::Traces, &[]),
+            any: WorldPass::new(context, Entry::AnyHit, WorldUse::Traces, &[]),
         }
     }
 
@@ -79,7 +84,19 @@ impl RayQueries {
         world: &World,
         rays: &[Ray],
     ) -> Result<Vec<Option<Hit>>, GpuError> {
-        let records: Vec<HitRecord> = run(&self.closest, context, scene, rays)?;
+        let mut records: Vec<HitRecord> = Vec::with_capacity(rays.len());
+        for batch in rays.chunks(BATCH) {
+            let paths: Vec<PathRay> = (batch.iter())
+                .map(|ray| PathRay::new(ray, 0, Vec3::ONE, 0))
+                .collect();
+            records.extend(self.closest.run::<PathRay, HitRecord>(
+                context,
+                scene,
+                &paths,
+                &[],
+                0,
+            )?);
+        }
         Ok(records
             .iter()
             .map(|record| {
@@ -89,6 +106,18 @@ impl RayQueries {
             .collect())
     }
 
+    /// Records the closest hits of `level`'s path rays into its hits.
+    pub fn record_closest(
+        &self,
+        context: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        level: &LevelBuffers,
+    ) {
+        let reads = [(ITEMS, &level.paths)];
+        (self.closest).record(context, encoder, scene, level.count, 0, &reads, &level.hits);
+    }
+
     /// Whether anything lies on each ray in `(0, t_max)`.
     pub fn occluded(
         &self,
@@ -96,22 +125,12 @@ impl RayQueries {
         scene: &GpuScene,
         rays: &[Ray],
     ) -> Result<Vec<bool>, GpuError> {
-        let words: Vec<u32> = run(&self.any, context, scene, rays)?;
-        Ok(words.into_iter().map(|word| word != 0).collect())
+        let mut occluded = Vec::with_capacity(rays.len());
+        for batch in rays.chunks(BATCH) {
+            let gpu_rays: Vec<GpuRay> = batch.iter().map(GpuRay::from).collect();
+            let words: Vec<u32> = self.any.run(context, scene, &gpu_rays, &[], 0)?;
+            occluded.extend(words.into_iter().map(|word| word != 0));
+        }
+        Ok(occluded)
     }
-}
-
-/// Runs `query` over `rays` batch by batch; one `Answer` per ray.
-fn run<Answer: Pod>(
-    query: &WorldPass,
-    context: &GpuContext,
-    scene: &GpuScene,
-    rays: &[Ray],
-) -> Result<Vec<Answer>, GpuError> {
-    let mut answers = Vec::with_capacity(rays.len());
-    for batch in rays.chunks(BATCH) {
-        let gpu_rays: Vec<GpuRay> = batch.iter().map(GpuRay::from).collect();
-        answers.extend(query.run::<GpuRay, Answer>(context, scene, &gpu_rays, &[], 0)?);
-    }
-    Ok(answers)
 }

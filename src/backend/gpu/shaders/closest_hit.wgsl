@@ -1,14 +1,6 @@
-// Closest hits of a batch of rays: reads `rays`, writes one record per ray
-// (mesh NO_MESH where nothing was hit). The static mesh first, then the
-// dynamic instances under the distance found, as `World::closest_hit`.
-
-struct HitRecord {
-    t: f32,
-    u: f32,
-    v: f32,
-    mesh: u32,
-    slot: u32,
-}
+// Closest hits of a batch of path rays: one record per ray (mesh NO_MESH
+// where nothing was hit). The static mesh first, then the dynamic
+// instances under the distance found, as `World::closest_hit`.
 
 @group(0) @binding(7) var<storage, read_write> hits: array<HitRecord>;
 
@@ -18,9 +10,9 @@ fn closest_hit(@builtin(global_invocation_id) id: vec3<u32>) {
     if index >= params.item_count {
         return;
     }
-    let ray = rays[index];
+    let ray = paths[index];
     var best = no_hit();
     walk_static(ray.origin, ray.direction, ray.t_max, false, &best);
     walk_dynamic(ray.origin, ray.direction, ray.t_max, false, &best);
-    hits[index] = HitRecord(best.t, best.u, best.v, best.mesh, best.slot);
+    hits[index] = HitRecord(best.t, best.u, best.v, best.mesh, best.slot, best.object, best.triangle, 0u);
 }

@@ -7,7 +7,7 @@
 // f64, and max/min with the CPU lanes' choice of operand. A point gets
 // the CPU backend's bits wherever its shadow segments get its answers.
 
-// A shading point with its BRDF prepared on the CPU (`PointBrdf`).
+// A shading point with its BRDF prepared for many lights (`PointBrdf`).
 struct ShadePoint {
     position: vec3<f32>,
     n_dot_v: f32,
@@ -42,30 +42,40 @@ struct DirectLight {
     shadow_rays: u32,
 }
 
-@group(0) @binding(1) var<storage, read> points: array<ShadePoint>;
+@group(0) @binding(1) var<storage, read> points: array<SurfacePoint>;
 @group(0) @binding(7) var<storage, read_write> direct: array<DirectLight>;
 @group(0) @binding(10) var<storage, read> lights: array<Light>;
 
-const PI: f32 = 3.14159265358979323846;
 // Where shadow segments stop short of the light (`render/light.rs`).
 const SHADOW_SEGMENT_END: f32 = 0.9999847412109375; // 1 - 2^-16
 
-// The CPU lanes' max and min (wide's, SSE's): `b` is never NaN here, and
-// a NaN `a` gives `b`.
-fn lane_max(a: f32, b: f32) -> f32 {
-    return select(b, a, a > b);
-}
-
-fn lane_min(a: f32, b: f32) -> f32 {
-    return select(b, a, a < b);
-}
-
-fn dot3(a: vec3<f32>, b: vec3<f32>) -> f32 {
-    return mul(a.x, b.x) + mul(a.y, b.y) + mul(a.z, b.z);
-}
-
-fn scale3(v: vec3<f32>, s: f32) -> vec3<f32> {
-    return vec3<f32>(mul(v.x, s), mul(v.y, s), mul(v.z, s));
+// `PointBrdf::new`: the BRDF's factors that do not depend on the light.
+fn shade_point(s: SurfacePoint) -> ShadePoint {
+    let n_dot_v = dot3(s.shading_normal, s.view);
+    // `SurfaceMaterial::highlight_roughness`.
+    let roughness = lane_max(s.roughness, 0.03);
+    let alpha = mul(roughness, roughness);
+    let alpha2 = mul(alpha, alpha);
+    let transmitted = 1.0 - s.transmission;
+    let diffuse = vec3<f32>(
+        mul(div(s.base_color.x, PI), transmitted),
+        mul(div(s.base_color.y, PI), transmitted),
+        mul(div(s.base_color.z, PI), transmitted),
+    );
+    return ShadePoint(
+        s.position,
+        n_dot_v,
+        s.geometric_normal,
+        alpha2,
+        s.shading_normal,
+        root(mul(mul(n_dot_v, n_dot_v), 1.0 - alpha2) + alpha2),
+        s.view,
+        s.metallic,
+        diffuse,
+        s.specular,
+        s.base_color,
+        mul(0.04, s.specular),
+    );
 }
 
 // `accel::offset::offset_ray_origin`, one coordinate: integer ULPs along
@@ -201,7 +211,12 @@ fn direct_light(@builtin(global_invocation_id) id: vec3<u32>) {
     if index >= params.item_count {
         return;
     }
-    let point = points[index];
+    let surface = points[index];
+    if surface.hit == 0u {
+        direct[index] = DirectLight(vec3<f32>(0.0), 0u);
+        return;
+    }
+    let point = shade_point(surface);
     let origin = offset_ray_origin(point.position, point.geometric_normal);
     var radiance = vec3<f32>(0.0);
     var shadow_rays = 0u;

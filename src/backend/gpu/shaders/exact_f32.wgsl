@@ -22,3 +22,9 @@ fn difference_of_products(p: f32, q: f32, r: f32, s: f32) -> f32 {
 fn root(x: f32) -> f32 {
     return sqrt(x);
 }
+
+// The unit normal of triangle (a, b, c) along (b - a) × (c - a), in f32:
+// within a few ULPs of the CPU's, which makes it in f64.
+fn triangle_normal(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec3<f32> {
+    return normalize(cross(b - a, c - a));
+}

@@ -26,3 +26,17 @@ fn difference_of_products(p: f32, q: f32, r: f32, s: f32) -> f32 {
 fn root(x: f32) -> f32 {
     return f32(sqrt(f64(x)));
 }
+
+// The unit normal of triangle (a, b, c) along (b - a) × (c - a), made in
+// f64 and rounded once, as `accel::mesh_bvh` makes a hit's normal.
+fn triangle_normal(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec3<f32> {
+    let e1 = vec3<f64>(b) - vec3<f64>(a);
+    let e2 = vec3<f64>(c) - vec3<f64>(a);
+    let n = vec3<f64>(
+        e1.y * e2.z - e2.y * e1.z,
+        e1.z * e2.x - e2.z * e1.x,
+        e1.x * e2.y - e2.x * e1.y,
+    );
+    let reciprocal = 1.0 / sqrt((n.x * n.x + n.y * n.y) + n.z * n.z);
+    return vec3<f32>(n * reciprocal);
+}

@@ -1,23 +1,6 @@
-// The world in flat form (Rust side: `accel::flat`), bound for every pass:
-// the static wide BVH, the dynamic objects' binary BVHs and the top level
-// over them, triangle vertices and ids. Each pass declares its own items
-// (binding 1) and answers (binding 7). Layouts are declared on the Rust
-// side as `Pod` structs; a test compares sizes and offsets.
-
-struct Params {
-    // Items of the pass: rays, or shading points.
-    item_count: u32,
-    static_node_count: u32,
-    top_node_offset: u32,
-    top_node_count: u32,
-    top_members_offset: u32,
-    // (1 + 2 gamma(3)): how much a slab exit may be understated by rounding.
-    binary_scale: f32,
-    // Stand-in for 1 / 0 and the largest inverse used.
-    inv_limit: f32,
-    // Lights of the direct-light pass (0 in ray queries).
-    light_count: u32,
-}
+// The world in flat form (Rust side: `accel::flat`), bound for the passes
+// that trace: the static wide BVH, the dynamic objects' binary BVHs and
+// the top level over them, triangle vertices and ids.
 
 // Eight children: their boxes as planes[(axis * 2 + side) * 8 + child]
 // (side 0 the min planes, 1 the max planes), where each leads, and which
@@ -49,7 +32,6 @@ struct Instance {
     _pad: u32,
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(2) var<storage, read> wide_nodes: array<WideNode>;
 @group(0) @binding(3) var<storage, read> binary_nodes: array<BinaryNode>;
 // Nine floats per triangle slot, in slot order: the static mesh's in

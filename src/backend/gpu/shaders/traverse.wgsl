@@ -12,7 +12,6 @@ const OUTSIDE: f32 = 1.2676506e30; // 2^100
 // Deepest wide tree the stack holds: seven entries a level, plus one.
 const WIDE_STACK: u32 = 96u;
 const BINARY_STACK: u32 = 64u;
-const NO_MESH: u32 = 0xffffffffu;
 
 struct TraversalRay {
     origin: vec3<f32>,

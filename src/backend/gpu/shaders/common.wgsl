@@ -1,0 +1,23 @@
+// What every pass reads: its uniform. Each pass declares its own items
+// (binding 1) and answers (binding 7). Layouts are declared on the Rust
+// side as `Pod` structs; a test compares sizes and offsets.
+
+struct Params {
+    // Items of the pass: rays, or shading points.
+    item_count: u32,
+    static_node_count: u32,
+    top_node_offset: u32,
+    top_node_count: u32,
+    top_members_offset: u32,
+    // (1 + 2 gamma(3)): how much a slab exit may be understated by rounding.
+    binary_scale: f32,
+    // Stand-in for 1 / 0 and the largest inverse used.
+    inv_limit: f32,
+    // Lights of the direct-light pass (0 in ray queries).
+    light_count: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+
+// The mesh of a hit record that records no hit.
+const NO_MESH: u32 = 0xffffffffu;

@@ -1,0 +1,49 @@
+// Vector arithmetic as glam's `Vec3` does it on the CPU: left to right,
+// each product rounded on its own through the prelude's `mul`, so no
+// product fuses into the sum that follows.
+
+const PI: f32 = 3.14159265358979323846;
+
+// The CPU lanes' max and min (wide's, SSE's): `b` is never NaN here, and
+// a NaN `a` gives `b`.
+fn lane_max(a: f32, b: f32) -> f32 {
+    return select(b, a, a > b);
+}
+
+fn lane_min(a: f32, b: f32) -> f32 {
+    return select(b, a, a < b);
+}
+
+fn dot3(a: vec3<f32>, b: vec3<f32>) -> f32 {
+    return mul(a.x, b.x) + mul(a.y, b.y) + mul(a.z, b.z);
+}
+
+fn scale3(v: vec3<f32>, s: f32) -> vec3<f32> {
+    return vec3<f32>(mul(v.x, s), mul(v.y, s), mul(v.z, s));
+}
+
+// Whether `x` is neither infinite nor NaN, read from its bits: a compiler
+// may assume that no float is either, and fold a comparison away.
+fn is_finite(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u;
+}
+
+// `Vec3::normalize`: times the reciprocal of the length.
+fn normalize3(v: vec3<f32>) -> vec3<f32> {
+    return scale3(v, div(1.0, root(dot3(v, v))));
+}
+
+// `Vec3::normalize_or_zero`: zero where the reciprocal length is not a
+// finite positive number.
+fn normalize_or_zero3(v: vec3<f32>) -> vec3<f32> {
+    let reciprocal = div(1.0, root(dot3(v, v)));
+    if is_finite(reciprocal) && reciprocal > 0.0 {
+        return scale3(v, reciprocal);
+    }
+    return vec3<f32>(0.0);
+}
+
+// `Mat3 * Vec3` for a matrix given by its columns.
+fn map3(x: vec3<f32>, y: vec3<f32>, z: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
+    return (scale3(x, v.x) + scale3(y, v.y)) + scale3(z, v.z);
+}
