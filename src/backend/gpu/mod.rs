@@ -1,19 +1,21 @@
 //! The GPU backend (wgpu): the frame's stages as the CPU backend runs
-//! them, with the work per ray and per point as compute passes over the
-//! uploaded world. Each level of the Whitted recursion (the camera's
-//! samples, then the reflected and refracted rays level by level) is one
-//! submission: closest hits ([`trace`]), shading points made from them
-//! with the scene's meshes, materials and textures ([`surface`]), and,
-//! for `--method whitted`, formula (1) whole — Omega, shadow segments and
-//! their sum — over those points where they lie ([`direct`]). The points
-//! and their direct light come back once. Making rays (camera samples and
-//! the recursion's), sampling lamps for `--method area` (whose shadow
-//! segments go back to the GPU) and resolve stay the CPU's code.
+//! them, with the work per sample, per ray and per point as compute passes
+//! over the uploaded world. Each level of the Whitted recursion (the
+//! camera's samples, then the reflected and refracted rays level by level)
+//! is one submission: the camera's rays for level 0 ([`camera`]), closest
+//! hits ([`trace`]), shading points made from them with the scene's
+//! meshes, materials and textures ([`surface`]), and, for `--method
+//! whitted`, formula (1) whole — Omega, shadow segments and their sum —
+//! over those points where they lie ([`direct`]). The points and their
+//! direct light come back once. The recursion's rays, the lamp samples of
+//! `--method area` (whose shadow segments go back to the GPU) and resolve
+//! stay the CPU's code.
 //!
 //! The passes round as the CPU does, so a frame differs from the CPU
 //! backend's only where a query answers differently, and tests compare
 //! exactly that: ray by ray, point by point and frame by frame.
 
+mod camera;
 mod context;
 pub(crate) mod direct;
 mod pass;
@@ -24,7 +26,7 @@ pub(crate) mod trace;
 
 use std::time::Instant;
 
-use glam::{UVec2, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 pub use context::{GpuContext, GpuError};
@@ -33,7 +35,7 @@ pub use scene::GpuScene;
 pub use trace::RayQueries;
 
 use super::band::{bands, resolve, shaded_value};
-use super::sampling::{film_position, lamp_sample};
+use super::sampling::lamp_sample;
 use super::{thread_pool, BackendError, RenderError};
 use crate::accel::{Ray, World};
 use crate::output::Image;
@@ -42,6 +44,7 @@ use crate::render::surface::ShadingPoint;
 use crate::render::{area, FrameJob};
 use crate::settings::Method;
 use crate::stats::FrameStats;
+use camera::{CameraPass, CameraRecord};
 use direct::DirectLight;
 use pass::{answer_buffer, read_back, BATCH};
 use surface::{FrameSurfaces, LevelBuffers, PathRay, SceneSurfaces, SurfacePass, SurfacePoint};
@@ -53,6 +56,7 @@ const SHADE_CHUNK: usize = 16384;
 pub struct GpuBackend {
     pool: rayon::ThreadPool,
     context: GpuContext,
+    camera: CameraPass,
     queries: RayQueries,
     surfaces: SurfacePass,
     direct: DirectLightPass,
@@ -70,6 +74,7 @@ impl GpuBackend {
         let context = GpuContext::new()?;
         Ok(GpuBackend {
             pool: thread_pool(threads)?,
+            camera: CameraPass::new(&context),
             queries: RayQueries::new(&context),
             surfaces: SurfacePass::new(&context),
             direct: DirectLightPass::new(&context),
@@ -136,6 +141,7 @@ impl GpuBackend {
             job,
             pool: &self.pool,
             context,
+            camera: &self.camera,
             queries: &self.queries,
             surfaces: &self.surfaces,
             direct: &self.direct,
@@ -188,7 +194,7 @@ impl GpuBackend {
         let frame = self.frame(job)?;
         let mut points = Vec::with_capacity(rays.len());
         for batch in paths.chunks(BATCH) {
-            let (records, _) = frame.trace_batch(batch, false)?;
+            let (records, _) = frame.trace_batch(Paths::Uploaded(batch), false)?;
             points.extend(records.iter().map(SurfacePoint::shading_point));
         }
         Ok(points)
@@ -208,6 +214,7 @@ struct Frame<'a> {
     job: &'a FrameJob<'a>,
     pool: &'a rayon::ThreadPool,
     context: &'a GpuContext,
+    camera: &'a CameraPass,
     queries: &'a RayQueries,
     surfaces: &'a SurfacePass,
     direct: &'a DirectLightPass,
@@ -215,6 +222,27 @@ struct Frame<'a> {
     scene_surfaces: &'a SceneSurfaces,
     frame_surfaces: FrameSurfaces,
     lights: FrameLights,
+}
+
+/// The path rays of a level: made by the CPU (the Whitted recursion's),
+/// or the camera's samples of the band from a row on (made on the GPU),
+/// by their range in the band.
+#[derive(Clone)]
+enum Paths<'a> {
+    Uploaded(&'a [PathRay]),
+    Camera(u32, std::ops::Range<usize>),
+}
+
+impl Paths<'_> {
+    /// The level in batches of at most [`BATCH`] rays.
+    fn batches(&self) -> Vec<Paths<'_>> {
+        match self {
+            Paths::Uploaded(paths) => paths.chunks(BATCH).map(Paths::Uploaded).collect(),
+            Paths::Camera(first_row, samples) => (samples.clone().step_by(BATCH))
+                .map(|start| Paths::Camera(*first_row, start..(start + BATCH).min(samples.end)))
+                .collect(),
+        }
+    }
 }
 
 /// A level's shading points and, for `--method whitted`, their direct
@@ -246,10 +274,9 @@ impl Frame<'_> {
         let whitted = method == Method::Whitted;
 
         let start = Instant::now();
-        let paths = self.camera_paths(rows.clone());
-        let mut shaded = self.trace(&paths, whitted)?;
+        let mut shaded = self.trace(Paths::Camera(rows.start, 0..band_samples), whitted)?;
         let primary = shaded.points.len();
-        stats.rays.primary += paths.len() as u64;
+        stats.rays.primary += band_samples as u64;
         stats.add_stage_time("primary", start.elapsed().as_secs_f64());
 
         let start = Instant::now();
@@ -265,7 +292,7 @@ impl Frame<'_> {
                 })
                 .collect();
             stats.rays.secondary += paths.len() as u64;
-            let next = self.trace(&paths, whitted)?;
+            let next = self.trace(Paths::Uploaded(&paths), whitted)?;
             if next.points.is_empty() {
                 break;
             }
@@ -293,31 +320,11 @@ impl Frame<'_> {
         Ok(pixels)
     }
 
-    /// The camera rays of every sample in the band, in sample order, made
-    /// exactly as the CPU backend makes them.
-    fn camera_paths(&self, rows: std::ops::Range<u32>) -> Vec<PathRay> {
-        let job = self.job;
-        let (width, spp) = (job.width, job.spp);
-        (rows.start..rows.end)
-            .into_par_iter()
-            .flat_map_iter(|y| {
-                (0..width).flat_map(move |x| {
-                    (0..spp).map(move |s| {
-                        let film = film_position(UVec2::new(x, y), width, s, spp);
-                        let ray = job.frame.camera.primary_ray(film, width, job.height);
-                        let sample = ((y - rows.start) * width + x) * spp + s;
-                        PathRay::new(&ray, sample, Vec3::ONE, 0)
-                    })
-                })
-            })
-            .collect()
-    }
-
     /// One level of paths on the GPU: their shading points in ray order
     /// (misses dropped) and, `with_direct`, formula (1) at each.
-    fn trace(&self, paths: &[PathRay], with_direct: bool) -> Result<Level, GpuError> {
+    fn trace(&self, paths: Paths, with_direct: bool) -> Result<Level, GpuError> {
         let mut level = Level::default();
-        for batch in paths.chunks(BATCH) {
+        for batch in paths.batches() {
             let (records, direct) = self.trace_batch(batch, with_direct)?;
             for (index, record) in records.iter().enumerate() {
                 let Some(point) = record.shading_point() else {
@@ -338,13 +345,21 @@ impl Frame<'_> {
     /// light come back.
     fn trace_batch(
         &self,
-        paths: &[PathRay],
+        paths: Paths,
         with_direct: bool,
     ) -> Result<(Vec<SurfacePoint>, Vec<DirectLight>), GpuError> {
         let context = self.context;
         context.checked("tracing a level of paths", || {
-            let level = LevelBuffers::new(context, paths)?;
             let mut encoder = context.device.create_command_encoder(&Default::default());
+            let level = match paths {
+                Paths::Uploaded(paths) => LevelBuffers::new(context, paths)?,
+                Paths::Camera(first_row, batch) => {
+                    let camera = CameraRecord::new(self.job, first_row, batch.start as u32);
+                    let count = batch.len();
+                    (self.camera).rays(context, &mut encoder, self.scene, &camera, count)?
+                }
+            };
+            let count = level.count;
             (self.queries).record_closest(context, &mut encoder, self.scene, &level);
             self.surfaces.record(
                 context,
@@ -356,8 +371,7 @@ impl Frame<'_> {
             );
             let direct = match with_direct {
                 true => {
-                    let direct =
-                        answer_buffer::<DirectLight>(context, "direct light", paths.len())?;
+                    let direct = answer_buffer::<DirectLight>(context, "direct light", count)?;
                     (self.direct).record(
                         context,
                         &mut encoder,
@@ -370,11 +384,11 @@ impl Frame<'_> {
                 }
                 false => None,
             };
-            let points = read_back(context, encoder, &level.points, paths.len())?;
+            let points = read_back(context, encoder, &level.points, count)?;
             let direct = match direct {
                 Some(direct) => {
                     let encoder = context.device.create_command_encoder(&Default::default());
-                    read_back(context, encoder, &direct, paths.len())?
+                    read_back(context, encoder, &direct, count)?
                 }
                 None => Vec::new(),
             };

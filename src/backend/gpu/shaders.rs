@@ -11,10 +11,11 @@ pub enum Arithmetic {
     PlainF32,
 }
 
-/// The compute entry points: the two ray queries, shading points and
-/// formula (1).
+/// The compute entry points: camera rays, the two ray queries, shading
+/// points and formula (1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Entry {
+    CameraRays,
     ClosestHit,
     AnyHit,
     Surface,
@@ -23,7 +24,8 @@ pub enum Entry {
 
 impl Entry {
     #[cfg(test)]
-    pub const ALL: [Entry; 4] = [
+    pub const ALL: [Entry; 5] = [
+        Entry::CameraRays,
         Entry::ClosestHit,
         Entry::AnyHit,
         Entry::Surface,
@@ -32,6 +34,7 @@ impl Entry {
 
     pub fn name(self) -> &'static str {
         match self {
+            Entry::CameraRays => "camera_rays",
             Entry::ClosestHit => "closest_hit",
             Entry::AnyHit => "any_hit",
             Entry::Surface => "surface",
@@ -58,6 +61,7 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
         Arithmetic::PlainF32 => include_str!("shaders/exact_f32.wgsl"),
     };
     let (tracing, own): (&[&str], &[&str]) = match entry {
+        Entry::CameraRays => (&[], &[VECTOR, PATH, include_str!("shaders/camera.wgsl")]),
         Entry::ClosestHit => (&TRACING, &[PATH, include_str!("shaders/closest_hit.wgsl")]),
         Entry::AnyHit => (
             &TRACING,
@@ -123,6 +127,7 @@ mod tests {
     #[test]
     fn wgsl_structs_match_the_uploaded_records() {
         use crate::accel::flat::{FlatBinaryNode, FlatInstance, FlatWideNode};
+        use crate::backend::gpu::camera::CameraRecord;
         use crate::backend::gpu::direct::{DirectLight, FlatLight};
         use crate::backend::gpu::scene::Params;
         use crate::backend::gpu::surface::{
@@ -162,6 +167,11 @@ mod tests {
                 vec![0, 4, 8, 12, 16, 20, 24, 28],
             ),
             ("PathRay", size_of::<PathRay>(), vec![0, 12, 16, 28, 32, 44]),
+            (
+                "Camera",
+                size_of::<CameraRecord>(),
+                vec![0, 12, 16, 28, 32, 44, 48, 60, 64, 68, 72, 76, 80, 88, 92],
+            ),
             (
                 "SurfacePoint",
                 size_of::<SurfacePoint>(),

@@ -400,12 +400,23 @@ pub struct LevelBuffers {
 }
 
 impl LevelBuffers {
+    /// Buffers for `paths`, uploaded.
     pub fn new(context: &GpuContext, paths: &[PathRay]) -> Result<LevelBuffers, GpuError> {
+        let uploaded = storage(context, "path rays", paths)?;
+        LevelBuffers::with_paths(context, uploaded, paths.len())
+    }
+
+    /// Buffers for `count` path rays already in `paths` on the GPU.
+    pub fn with_paths(
+        context: &GpuContext,
+        paths: wgpu::Buffer,
+        count: usize,
+    ) -> Result<LevelBuffers, GpuError> {
         Ok(LevelBuffers {
-            count: paths.len(),
-            paths: storage(context, "path rays", paths)?,
-            hits: answer_buffer::<HitRecord>(context, "closest hits", paths.len())?,
-            points: answer_buffer::<SurfacePoint>(context, "shading points", paths.len())?,
+            count,
+            paths,
+            hits: answer_buffer::<HitRecord>(context, "closest hits", count)?,
+            points: answer_buffer::<SurfacePoint>(context, "shading points", count)?,
         })
     }
 }

@@ -2,6 +2,7 @@
 // where nothing was hit). The static mesh first, then the dynamic
 // instances under the distance found, as `World::closest_hit`.
 
+@group(0) @binding(1) var<storage, read> paths: array<PathRay>;
 @group(0) @binding(7) var<storage, read_write> hits: array<HitRecord>;
 
 @compute @workgroup_size(64)

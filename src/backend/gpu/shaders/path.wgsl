@@ -1,7 +1,8 @@
-// The rays of camera paths (binding 1 of the closest-hit and shading-point
-// passes): a ray as the CPU made it, the pixel sample its hit shades, the
-// path's throughput and its Whitted depth. And the closest hit of each,
-// as the closest-hit pass writes it and the shading-point pass reads it.
+// The rays of camera paths (the items of the closest-hit and shading-point
+// passes): a ray as the camera or the Whitted recursion made it, the
+// pixel sample its hit shades, the path's throughput and its Whitted
+// depth. And the closest hit of each, as the closest-hit pass writes it
+// and the shading-point pass reads it.
 
 struct PathRay {
     origin: vec3<f32>,
@@ -23,5 +24,3 @@ struct HitRecord {
     triangle: u32,
     _pad: u32,
 }
-
-@group(0) @binding(1) var<storage, read> paths: array<PathRay>;

@@ -66,6 +66,7 @@ struct MaterialRecord {
     _pad1: u32,
 }
 
+@group(0) @binding(1) var<storage, read> paths: array<PathRay>;
 @group(0) @binding(10) var<storage, read> hits: array<HitRecord>;
 @group(0) @binding(11) var<storage, read> meshes: array<MeshRecord>;
 // Triangle indices and material indices as words, positions, normals and
