@@ -6,7 +6,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::context::{GpuContext, GpuError};
-use super::pass::{answer_buffer, WorldPass, WorldUse, ITEMS};
+use super::pass::{answer_buffer, Dispatch, WorldPass, WorldUse, ITEMS};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::surface::{LevelBuffers, PathRay};
@@ -77,7 +77,7 @@ pub struct CameraPass {
 impl CameraPass {
     pub fn new(context: &GpuContext) -> CameraPass {
         CameraPass {
-            pass: WorldPass::new(context, Entry::CameraRays, WorldUse::None, &[]),
+            pass: WorldPass::new(context, Entry::CameraRays, WorldUse::None, &[], &[]),
         }
     }
 
@@ -94,7 +94,13 @@ impl CameraPass {
         let record = storage(context, "camera", std::slice::from_ref(camera))?;
         let paths = answer_buffer::<PathRay>(context, "camera rays", count)?;
         let reads = [(ITEMS, &record)];
-        (self.pass).record(context, encoder, scene, count, 0, &reads, &paths);
+        (self.pass).record(
+            context,
+            encoder,
+            Dispatch::new(scene, count),
+            &reads,
+            &paths,
+        );
         LevelBuffers::with_paths(context, paths, count)
     }
 }

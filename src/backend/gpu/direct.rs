@@ -16,7 +16,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::context::{GpuContext, GpuError};
-use super::pass::{WorldPass, WorldUse, BATCH, ITEMS};
+use super::pass::{Dispatch, WorldPass, WorldUse, BATCH, ITEMS};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::surface::{LevelBuffers, SurfacePoint};
@@ -71,6 +71,14 @@ pub struct DirectLight {
 }
 
 impl DirectLight {
+    /// A point's direct light made on the CPU (`--method area`).
+    pub fn new(radiance: Vec3, shadow_rays: u32) -> DirectLight {
+        DirectLight {
+            radiance: radiance.to_array(),
+            shadow_rays,
+        }
+    }
+
     pub fn radiance(&self) -> Vec3 {
         Vec3::from_array(self.radiance)
     }
@@ -104,7 +112,13 @@ pub struct DirectLightPass {
 impl DirectLightPass {
     pub fn new(context: &GpuContext) -> DirectLightPass {
         DirectLightPass {
-            pass: WorldPass::new(context, Entry::DirectLight, WorldUse::Traces, &[LIGHTS]),
+            pass: WorldPass::new(
+                context,
+                Entry::DirectLight,
+                WorldUse::Traces,
+                &[LIGHTS],
+                &[],
+            ),
         }
     }
 
@@ -121,7 +135,13 @@ impl DirectLightPass {
     ) {
         let reads = [(ITEMS, &level.points), (LIGHTS, &lights.buffer)];
         let count = level.count;
-        (self.pass).record(context, encoder, scene, count, lights.count, &reads, direct);
+        (self.pass).record(
+            context,
+            encoder,
+            Dispatch::new(scene, count).with_lights(lights.count),
+            &reads,
+            direct,
+        );
     }
 
     /// Formula (1) at each of `points`, in order, and the shadow segments

@@ -14,7 +14,7 @@ use super::scene::GpuScene;
 use super::shaders::{self, Arithmetic, Entry};
 
 /// Invocations per workgroup, as the shaders declare.
-const WORKGROUP: u32 = 64;
+pub const WORKGROUP: u32 = 64;
 /// Items per dispatch: within the 65535 workgroups a dispatch may have in
 /// one dimension, and a few tens of MiB of items.
 pub const BATCH: usize = 1 << 20;
@@ -34,6 +34,30 @@ pub enum WorldUse {
     None,
 }
 
+/// What one recording of a pass runs over: the world (its arrays, for the
+/// passes that trace, and its parameters), how many items (at most
+/// [`BATCH`]: one invocation each) and how many lights.
+#[derive(Clone, Copy)]
+pub struct Dispatch<'a> {
+    scene: &'a GpuScene,
+    items: usize,
+    lights: u32,
+}
+
+impl<'a> Dispatch<'a> {
+    pub fn new(scene: &'a GpuScene, items: usize) -> Dispatch<'a> {
+        Dispatch {
+            scene,
+            items,
+            lights: 0,
+        }
+    }
+
+    pub fn with_lights(self, lights: u32) -> Dispatch<'a> {
+        Dispatch { lights, ..self }
+    }
+}
+
 /// A compute pipeline and its bind group layout.
 pub struct WorldPass {
     entry: Entry,
@@ -44,8 +68,15 @@ pub struct WorldPass {
 
 impl WorldPass {
     /// The pipeline of `entry`, binding its items, its answers, the world
-    /// as `world` says and the read-only arrays at `reads`.
-    pub fn new(context: &GpuContext, entry: Entry, world: WorldUse, reads: &[u32]) -> WorldPass {
+    /// as `world` says, the read-only arrays at `reads` and further
+    /// writable ones at `writes`.
+    pub fn new(
+        context: &GpuContext,
+        entry: Entry,
+        world: WorldUse,
+        reads: &[u32],
+        writes: &[u32],
+    ) -> WorldPass {
         let device = &context.device;
         let buffer = |binding, ty| wgpu::BindGroupLayoutEntry {
             binding,
@@ -72,6 +103,8 @@ impl WorldPass {
         };
         let bindings = world_bindings.iter().chain(reads);
         entries.extend(bindings.map(|&binding| buffer(binding, read_only)));
+        let writable = wgpu::BufferBindingType::Storage { read_only: false };
+        entries.extend(writes.iter().map(|&binding| buffer(binding, writable)));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some(entry.name()),
             entries: &entries,
@@ -106,22 +139,25 @@ impl WorldPass {
         }
     }
 
-    /// Records the pass over `count` items (at most [`BATCH`]) into
-    /// `encoder`, with `reads` bound (the items at [`ITEMS`] among them),
-    /// `light_count` lights, and the answers written to `answers`.
+    /// Records the pass into `encoder` as `dispatch` says, with `reads`
+    /// bound (the items at [`ITEMS`] among them, and any further writable
+    /// arrays) and the answers written to `answers`.
     pub fn record(
         &self,
         context: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
-        scene: &GpuScene,
-        count: usize,
-        light_count: u32,
+        dispatch: Dispatch,
         reads: &[Bound],
         answers: &wgpu::Buffer,
     ) {
+        let Dispatch {
+            scene,
+            items: count,
+            lights,
+        } = dispatch;
         debug_assert!(count <= BATCH);
         let device = &context.device;
-        let params = scene.params(count as u32, light_count);
+        let params = scene.params(count as u32, lights);
         let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("pass params"),
             contents: bytemuck::bytes_of(&params),
@@ -170,23 +206,16 @@ impl WorldPass {
                 .into_iter()
                 .chain(inputs.iter().copied())
                 .collect();
-            self.record(
-                context,
-                &mut encoder,
-                scene,
-                items.len(),
-                light_count,
-                &reads,
-                &answers,
-            );
+            let dispatch = Dispatch::new(scene, items.len()).with_lights(light_count);
+            self.record(context, &mut encoder, dispatch, &reads, &answers);
             read_back(context, encoder, &answers, items.len())
         })
     }
 }
 
 /// A storage buffer for `count` answers of type `Answer` (one at least:
-/// a binding cannot be empty), which a later pass may read and
-/// [`read_back`] may copy out.
+/// a binding cannot be empty, zeroed as wgpu zeroes every buffer), which
+/// a later pass may read, a copy may fill and [`read_back`] may copy out.
 pub fn answer_buffer<Answer: Pod>(
     context: &GpuContext,
     what: &'static str,
@@ -197,7 +226,9 @@ pub fn answer_buffer<Answer: Pod>(
     Ok(context.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(what),
         size: bytes,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     }))
 }

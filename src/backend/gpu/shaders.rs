@@ -12,7 +12,8 @@ pub enum Arithmetic {
 }
 
 /// The compute entry points: camera rays, the two ray queries, shading
-/// points and formula (1).
+/// points, formula (1), the Whitted recursion's rays and their
+/// compaction, and the film.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Entry {
     CameraRays,
@@ -20,16 +21,28 @@ pub enum Entry {
     AnyHit,
     Surface,
     DirectLight,
+    Scatter,
+    ScanBlocks,
+    ScanSums,
+    Compact,
+    Accumulate,
+    Resolve,
 }
 
 impl Entry {
     #[cfg(test)]
-    pub const ALL: [Entry; 5] = [
+    pub const ALL: [Entry; 11] = [
         Entry::CameraRays,
         Entry::ClosestHit,
         Entry::AnyHit,
         Entry::Surface,
         Entry::DirectLight,
+        Entry::Scatter,
+        Entry::ScanBlocks,
+        Entry::ScanSums,
+        Entry::Compact,
+        Entry::Accumulate,
+        Entry::Resolve,
     ];
 
     pub fn name(self) -> &'static str {
@@ -39,6 +52,12 @@ impl Entry {
             Entry::AnyHit => "any_hit",
             Entry::Surface => "surface",
             Entry::DirectLight => "direct_light",
+            Entry::Scatter => "scatter",
+            Entry::ScanBlocks => "scan_blocks",
+            Entry::ScanSums => "scan_sums",
+            Entry::Compact => "compact",
+            Entry::Accumulate => "accumulate",
+            Entry::Resolve => "resolve",
         }
     }
 }
@@ -87,6 +106,23 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
                 include_str!("shaders/direct_light.wgsl"),
             ],
         ),
+        Entry::Scatter => (
+            &[],
+            &[
+                VECTOR,
+                PATH,
+                SURFACE_POINT,
+                include_str!("shaders/scatter.wgsl"),
+            ],
+        ),
+        Entry::ScanBlocks => (&[], &[include_str!("shaders/scan_blocks.wgsl")]),
+        Entry::ScanSums => (&[], &[include_str!("shaders/scan_sums.wgsl")]),
+        Entry::Compact => (&[], &[PATH, include_str!("shaders/compact.wgsl")]),
+        Entry::Accumulate => (
+            &[],
+            &[SURFACE_POINT, include_str!("shaders/accumulate.wgsl")],
+        ),
+        Entry::Resolve => (&[], &[include_str!("shaders/resolve.wgsl")]),
     };
     [prelude, COMMON]
         .iter()

@@ -6,14 +6,14 @@
 //! placement (object maps, animated materials, deformed meshes) once per
 //! frame.
 //!
-//! The points stay on the GPU for formula (1) and come back once, for the
-//! Whitted recursion, `--method area` and resolve, which stay on the CPU.
+//! The points stay on the GPU for formula (1), the film and the Whitted
+//! recursion; only `--method area` reads them back, to sample lamps.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Affine3A, Mat3, Vec3};
 
 use super::context::{GpuContext, GpuError};
-use super::pass::{answer_buffer, Bound, WorldPass, WorldUse, ITEMS};
+use super::pass::{answer_buffer, Bound, Dispatch, WorldPass, WorldUse, ITEMS};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::trace::HitRecord;
@@ -352,7 +352,7 @@ impl SurfacePass {
             HITS, MESHES, MESH_WORDS, TEXTURES, TEXELS, OBJECTS, MATERIALS, DEFORMED,
         ];
         SurfacePass {
-            pass: WorldPass::new(context, Entry::Surface, WorldUse::None, &inputs),
+            pass: WorldPass::new(context, Entry::Surface, WorldUse::None, &inputs, &[]),
         }
     }
 
@@ -381,9 +381,7 @@ impl SurfacePass {
         self.pass.record(
             context,
             encoder,
-            world,
-            level.count,
-            0,
+            Dispatch::new(world, level.count),
             &reads,
             &level.points,
         );

@@ -8,7 +8,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 
 use super::context::{GpuContext, GpuError};
-use super::pass::{WorldPass, WorldUse, BATCH, ITEMS};
+use super::pass::{Dispatch, WorldPass, WorldUse, BATCH, ITEMS};
 use super::scene::GpuScene;
 use super::shaders::Entry;
 use super::surface::{LevelBuffers, PathRay};
@@ -70,8 +70,8 @@ pub struct RayQueries {
 impl RayQueries {
     pub fn new(context: &GpuContext) -> RayQueries {
         RayQueries {
-            closest: WorldPass::new(context, Entry::ClosestHit, WorldUse::Traces, &[]),
-            any: WorldPass::new(context, Entry::AnyHit, WorldUse::Traces, &[]),
+            closest: WorldPass::new(context, Entry::ClosestHit, WorldUse::Traces, &[], &[]),
+            any: WorldPass::new(context, Entry::AnyHit, WorldUse::Traces, &[], &[]),
         }
     }
 
@@ -115,7 +115,13 @@ impl RayQueries {
         level: &LevelBuffers,
     ) {
         let reads = [(ITEMS, &level.paths)];
-        (self.closest).record(context, encoder, scene, level.count, 0, &reads, &level.hits);
+        (self.closest).record(
+            context,
+            encoder,
+            Dispatch::new(scene, level.count),
+            &reads,
+            &level.hits,
+        );
     }
 
     /// Whether anything lies on each ray in `(0, t_max)`.

@@ -78,23 +78,6 @@ fn shade_point(s: SurfacePoint) -> ShadePoint {
     );
 }
 
-// `accel::offset::offset_ray_origin`, one coordinate: integer ULPs along
-// the normal, a fixed step near zero.
-fn offset_coordinate(p: f32, n: f32) -> f32 {
-    if abs(p) < 1.0 / 32.0 {
-        return p + mul(1.0 / 65536.0, n);
-    }
-    var ulps = i32(mul(256.0, n));
-    if p < 0.0 {
-        ulps = -ulps;
-    }
-    return bitcast<f32>(bitcast<i32>(p) + ulps);
-}
-
-fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(offset_coordinate(p.x, n.x), offset_coordinate(p.y, n.y), offset_coordinate(p.z, n.z));
-}
-
 // `PointBrdf::evaluate_lanes` for one light direction; zero where the
 // CPU's lane is masked off.
 fn brdf(point: ShadePoint, l: vec3<f32>) -> vec3<f32> {

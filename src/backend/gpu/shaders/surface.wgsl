@@ -154,11 +154,6 @@ fn sample(index: u32, uv: vec2<f32>) -> vec4<f32> {
     return lerp4(top, bottom, fy);
 }
 
-// `f32::clamp` to [0, 1]: NaN stays NaN, as on the CPU.
-fn unit_clamp(x: f32) -> f32 {
-    return select(select(x, 1.0, x > 1.0), 0.0, x < 0.0);
-}
-
 fn mul3(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(mul(a.x, b.x), mul(a.y, b.y), mul(a.z, b.z));
 }

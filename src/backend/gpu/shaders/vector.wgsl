@@ -22,6 +22,11 @@ fn scale3(v: vec3<f32>, s: f32) -> vec3<f32> {
     return vec3<f32>(mul(v.x, s), mul(v.y, s), mul(v.z, s));
 }
 
+// `f32::clamp` to [0, 1]: NaN stays NaN, as on the CPU.
+fn unit_clamp(x: f32) -> f32 {
+    return select(select(x, 1.0, x > 1.0), 0.0, x < 0.0);
+}
+
 // Whether `x` is neither infinite nor NaN, read from its bits: a compiler
 // may assume that no float is either, and fold a comparison away.
 fn is_finite(x: f32) -> bool {
@@ -46,4 +51,21 @@ fn normalize_or_zero3(v: vec3<f32>) -> vec3<f32> {
 // `Mat3 * Vec3` for a matrix given by its columns.
 fn map3(x: vec3<f32>, y: vec3<f32>, z: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
     return (scale3(x, v.x) + scale3(y, v.y)) + scale3(z, v.z);
+}
+
+// `accel::offset::offset_ray_origin`, one coordinate: integer ULPs along
+// the normal, a fixed step near zero.
+fn offset_coordinate(p: f32, n: f32) -> f32 {
+    if abs(p) < 1.0 / 32.0 {
+        return p + mul(1.0 / 65536.0, n);
+    }
+    var ulps = i32(mul(256.0, n));
+    if p < 0.0 {
+        ulps = -ulps;
+    }
+    return bitcast<f32>(bitcast<i32>(p) + ulps);
+}
+
+fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(offset_coordinate(p.x, n.x), offset_coordinate(p.y, n.y), offset_coordinate(p.z, n.z));
 }

@@ -1,0 +1,119 @@
+//! A band's film on the GPU: each level's shading points add what they
+//! send to their pixel samples (`accumulate.wgsl`), in point order, and
+//! the samples resolve into pixels (`resolve.wgsl`), as the CPU's
+//! `shaded_value` and `resolve` do; only the pixels and two counters come
+//! back.
+
+use glam::Vec4;
+
+use super::context::{GpuContext, GpuError};
+use super::pass::{answer_buffer, read_back, Dispatch, WorldPass, WorldUse, ITEMS};
+use super::scene::GpuScene;
+use super::shaders::Entry;
+use super::surface::LevelBuffers;
+
+/// The direct light of a level's points, for the accumulation.
+const DIRECT: u32 = 10;
+/// The shading-point and shadow-segment counters.
+const COUNTERS: u32 = 18;
+
+/// The two pipelines, made once per run.
+pub struct FilmPasses {
+    accumulate: WorldPass,
+    resolve: WorldPass,
+}
+
+impl FilmPasses {
+    pub fn new(context: &GpuContext) -> FilmPasses {
+        FilmPasses {
+            accumulate: WorldPass::new(
+                context,
+                Entry::Accumulate,
+                WorldUse::None,
+                &[DIRECT],
+                &[COUNTERS],
+            ),
+            resolve: WorldPass::new(context, Entry::Resolve, WorldUse::None, &[], &[]),
+        }
+    }
+}
+
+/// One band's samples and counters.
+pub struct Film {
+    samples: wgpu::Buffer,
+    counters: wgpu::Buffer,
+    pixels: usize,
+}
+
+/// What a band's film gives back.
+pub struct Developed {
+    pub pixels: Vec<Vec4>,
+    pub shading_points: u64,
+    pub shadow_rays: u64,
+}
+
+impl Film {
+    /// A film of `pixels` pixels of `spp` samples, all dark and uncovered.
+    pub fn new(context: &GpuContext, pixels: usize, spp: usize) -> Result<Film, GpuError> {
+        Ok(Film {
+            samples: answer_buffer::<[f32; 4]>(context, "pixel samples", pixels * spp)?,
+            counters: answer_buffer::<[u32; 2]>(context, "counters", 1)?,
+            pixels,
+        })
+    }
+
+    /// Records the adding of `level`'s points, with their `direct` light.
+    pub fn accumulate(
+        &self,
+        passes: &FilmPasses,
+        context: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        level: &LevelBuffers,
+        direct: &wgpu::Buffer,
+    ) {
+        let reads = [
+            (ITEMS, &level.points),
+            (DIRECT, direct),
+            (COUNTERS, &self.counters),
+        ];
+        let count = level.count;
+        (passes.accumulate).record(
+            context,
+            encoder,
+            Dispatch::new(scene, count),
+            &reads,
+            &self.samples,
+        );
+    }
+
+    /// Resolves the samples into pixels and reads them back.
+    pub fn develop(
+        &self,
+        passes: &FilmPasses,
+        context: &GpuContext,
+        scene: &GpuScene,
+    ) -> Result<Developed, GpuError> {
+        let pixels = answer_buffer::<[f32; 4]>(context, "pixels", self.pixels)?;
+        let mut encoder = context.device.create_command_encoder(&Default::default());
+        let reads = [(ITEMS, &self.samples)];
+        let count = self.pixels;
+        (passes.resolve).record(
+            context,
+            &mut encoder,
+            Dispatch::new(scene, count),
+            &reads,
+            &pixels,
+        );
+        let pixels: Vec<[f32; 4]> = read_back(context, encoder, &pixels, count)?;
+        let encoder = context.device.create_command_encoder(&Default::default());
+        let [counters]: [[u32; 2]; 1] = read_back(context, encoder, &self.counters, 1)?
+            .try_into()
+            .map_err(|_| GpuError::Readback("no counters".into()))?;
+        Ok(Developed {
+            pixels: pixels.into_iter().map(Vec4::from_array).collect(),
+            shading_points: counters[0] as u64,
+            shadow_rays: counters[1] as u64,
+        })
+    }
+}

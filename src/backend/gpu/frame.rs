@@ -1,0 +1,247 @@
+//! One frame on the GPU, band by band. Each level of the band's camera
+//! paths is one submission: level 0's rays made by the camera pass, then
+//! closest hits, shading points, their direct light (formula (1) on the
+//! GPU for `whitted`; lamp samples made on the CPU for `area`, their
+//! segments tested on the GPU), the film's accumulation, and the next
+//! level's rays with their compaction, of which only the length comes
+//! back. The band's pixels come back once, resolved.
+
+use std::ops::Range;
+use std::time::Instant;
+
+use glam::{Vec3, Vec4};
+use rayon::prelude::*;
+
+use super::camera::CameraRecord;
+use super::context::{GpuContext, GpuError};
+use super::direct::{DirectLight, FrameLights};
+use super::film::Film;
+use super::pass::{answer_buffer, read_back, BATCH};
+use super::scatter::batches;
+use super::scene::{storage, GpuScene};
+use super::surface::{FrameSurfaces, LevelBuffers, PathRay, SceneSurfaces, SurfacePoint};
+use super::Pipelines;
+use crate::accel::Ray;
+use crate::backend::sampling::lamp_sample;
+use crate::render::surface::ShadingPoint;
+use crate::render::{area, FrameJob};
+use crate::settings::Method;
+use crate::stats::FrameStats;
+
+/// Points whose lamp samples go to the GPU together (`--method area`): at
+/// 64 lights, about a million segments.
+const SHADE_CHUNK: usize = 16384;
+
+/// One frame's view of the backend, with the frame's uploads.
+pub struct Frame<'a> {
+    pub job: &'a FrameJob<'a>,
+    pub context: &'a GpuContext,
+    pub pipelines: &'a Pipelines,
+    pub scene: &'a GpuScene,
+    pub scene_surfaces: &'a SceneSurfaces,
+    pub frame_surfaces: FrameSurfaces,
+    pub lights: FrameLights,
+}
+
+impl Frame<'_> {
+    /// The pixels of `rows`; ray, point and segment counts and stage
+    /// times go to `stats`.
+    pub fn render_band(
+        &self,
+        rows: Range<u32>,
+        method: Method,
+        stats: &mut FrameStats,
+    ) -> Result<Vec<Vec4>, GpuError> {
+        let job = self.job;
+        let context = self.context;
+        let pixels = ((rows.end - rows.start) * job.width) as usize;
+        let band_samples = pixels * job.spp as usize;
+        let band_start = rows.start as u64 * job.width as u64 * job.spp as u64;
+        context.checked("rendering a band", || {
+            let film = Film::new(context, pixels, job.spp as usize)?;
+
+            let start = Instant::now();
+            let mut level = Vec::new();
+            for batch in batches(band_samples) {
+                let count = batch.len();
+                let camera = CameraRecord::new(job, rows.start, batch.start as u32);
+                let mut encoder = context.device.create_command_encoder(&Default::default());
+                let camera_rays = (self.pipelines.camera).rays(
+                    context,
+                    &mut encoder,
+                    self.scene,
+                    &camera,
+                    count,
+                )?;
+                let encoder = self.shade(encoder, &camera_rays, &film, method, band_start)?;
+                level.extend(self.continue_paths(encoder, &camera_rays, 0)?);
+            }
+            stats.rays.primary += band_samples as u64;
+            stats.add_stage_time("primary", start.elapsed().as_secs_f64());
+
+            let start = Instant::now();
+            for depth in 1..=job.max_depth {
+                stats.rays.secondary += level.iter().map(|l| l.count as u64).sum::<u64>();
+                let mut next = Vec::new();
+                for paths in &level {
+                    let encoder = context.device.create_command_encoder(&Default::default());
+                    let encoder = self.shade(encoder, paths, &film, method, band_start)?;
+                    next.extend(self.continue_paths(encoder, paths, depth)?);
+                }
+                level = next;
+            }
+            stats.add_stage_time("secondary", start.elapsed().as_secs_f64());
+
+            let start = Instant::now();
+            let developed = film.develop(&self.pipelines.film, context, self.scene)?;
+            stats.rays.shadow += developed.shadow_rays;
+            stats.shading_points += developed.shading_points;
+            stats.add_stage_time("resolve", start.elapsed().as_secs_f64());
+            Ok(developed.pixels)
+        })
+    }
+
+    /// Records a level's closest hits, shading points, direct light and
+    /// accumulation into the film; for `area`, submits halfway to make
+    /// the lamp samples on the CPU. The encoder to go on with.
+    fn shade(
+        &self,
+        mut encoder: wgpu::CommandEncoder,
+        level: &LevelBuffers,
+        film: &Film,
+        method: Method,
+        band_start: u64,
+    ) -> Result<wgpu::CommandEncoder, GpuError> {
+        let (context, pipelines, scene) = (self.context, self.pipelines, self.scene);
+        self.record_points(&mut encoder, level);
+        let direct = match method {
+            Method::Area => {
+                let points = read_back(context, encoder, &level.points, level.count)?;
+                encoder = context.device.create_command_encoder(&Default::default());
+                storage(
+                    context,
+                    "direct light",
+                    &self.area_light(&points, band_start)?,
+                )?
+            }
+            _ => {
+                let direct = answer_buffer::<DirectLight>(context, "direct light", level.count)?;
+                (pipelines.direct).record(
+                    context,
+                    &mut encoder,
+                    scene,
+                    &self.lights,
+                    level,
+                    &direct,
+                );
+                direct
+            }
+        };
+        film.accumulate(
+            &pipelines.film,
+            context,
+            &mut encoder,
+            scene,
+            level,
+            &direct,
+        );
+        Ok(encoder)
+    }
+
+    /// Records the closest hits of `level`'s rays and the shading points
+    /// made from them.
+    fn record_points(&self, encoder: &mut wgpu::CommandEncoder, level: &LevelBuffers) {
+        let (context, pipelines, scene) = (self.context, self.pipelines, self.scene);
+        (pipelines.queries).record_closest(context, encoder, scene, level);
+        let surfaces = (self.scene_surfaces, &self.frame_surfaces);
+        (pipelines.surfaces).record(context, encoder, scene, surfaces.0, surfaces.1, level);
+    }
+
+    /// The next level of the recursion from `level` at `depth` (none at
+    /// the deepest), submitting `encoder` either way.
+    fn continue_paths(
+        &self,
+        encoder: wgpu::CommandEncoder,
+        level: &LevelBuffers,
+        depth: u32,
+    ) -> Result<Vec<LevelBuffers>, GpuError> {
+        if depth >= self.job.max_depth {
+            self.context.queue.submit([encoder.finish()]);
+            return Ok(Vec::new());
+        }
+        (self.pipelines.scatter).next_level(self.context, encoder, self.scene, level)
+    }
+
+    /// The shading points of `rays`' closest hits (None for a miss).
+    pub fn shading_points(&self, rays: &[Ray]) -> Result<Vec<Option<ShadingPoint>>, GpuError> {
+        let context = self.context;
+        let mut points = Vec::with_capacity(rays.len());
+        for batch in rays.chunks(BATCH) {
+            let paths: Vec<PathRay> = (batch.iter())
+                .map(|ray| PathRay::new(ray, 0, Vec3::ONE, 0))
+                .collect();
+            let records: Vec<SurfacePoint> = context.checked("making shading points", || {
+                let level = LevelBuffers::new(context, &paths)?;
+                let mut encoder = context.device.create_command_encoder(&Default::default());
+                self.record_points(&mut encoder, &level);
+                read_back(context, encoder, &level.points, level.count)
+            })?;
+            points.extend(records.iter().map(SurfacePoint::shading_point));
+        }
+        Ok(points)
+    }
+
+    /// `--method area` at a level's points (`records`, misses included):
+    /// each point's lamp samples are made on the CPU in light order, their
+    /// segments tested on the GPU, and the visible samples summed in that
+    /// order, so a point gets the CPU backend's bits wherever the segments
+    /// get its answers.
+    fn area_light(
+        &self,
+        records: &[SurfacePoint],
+        band_start: u64,
+    ) -> Result<Vec<DirectLight>, GpuError> {
+        let job = self.job;
+        let mut direct = Vec::with_capacity(records.len());
+        for chunk in records.chunks(SHADE_CHUNK) {
+            let samples: Vec<LampSamples> = chunk
+                .par_iter()
+                .map(|record| {
+                    let mut samples = LampSamples::default();
+                    if let Some(point) = record.shading_point() {
+                        let sample = band_start + point.sample as u64;
+                        let lamp = |light| lamp_sample(sample, job.spp, light, point.depth);
+                        area::light_samples(&point, &job.frame.lights, lamp, |s| {
+                            samples.values.push(s.value);
+                            samples.rays.push(s.shadow_ray);
+                        });
+                    }
+                    samples
+                })
+                .collect();
+            let rays: Vec<Ray> = samples
+                .iter()
+                .flat_map(|s| s.rays.iter().copied())
+                .collect();
+            let occluded = (self.pipelines.queries).occluded(self.context, self.scene, &rays)?;
+            let mut answers = occluded.into_iter();
+            for point_samples in &samples {
+                let mut radiance = Vec3::ZERO;
+                for (value, blocked) in point_samples.values.iter().zip(answers.by_ref()) {
+                    if !blocked {
+                        radiance += *value;
+                    }
+                }
+                direct.push(DirectLight::new(radiance, point_samples.rays.len() as u32));
+            }
+        }
+        Ok(direct)
+    }
+}
+
+/// One point's lamp samples in light order, visibility aside.
+#[derive(Default)]
+struct LampSamples {
+    values: Vec<Vec3>,
+    rays: Vec<Ray>,
+}

@@ -1,0 +1,53 @@
+// What a level's shading points send to their pixel samples (`band.rs`'s
+// `shaded_value` and `resolve`): each point's emission plus its direct
+// light, times its path throughput, added to its sample's radiance in
+// point order. A sample's points are consecutive in a level, so the first
+// invocation of each run adds the whole run, in order, and no two
+// invocations touch one sample: the sums are the CPU's, bit for bit.
+// Camera hits (depth 0) mark their sample covered; the shading points and
+// the shadow segments are counted (integer atomics: any order gives the
+// same count).
+
+struct DirectLight {
+    radiance: vec3<f32>,
+    shadow_rays: u32,
+}
+
+@group(0) @binding(1) var<storage, read> points: array<SurfacePoint>;
+@group(0) @binding(10) var<storage, read> direct: array<DirectLight>;
+// Per sample of the band: radiance, and 1 in w where a camera ray hit.
+@group(0) @binding(7) var<storage, read_write> samples: array<vec4<f32>>;
+// Shading points, then shadow segments.
+@group(0) @binding(18) var<storage, read_write> counters: array<atomic<u32>, 2>;
+
+@compute @workgroup_size(64)
+fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
+    let index = id.x;
+    if index >= params.item_count {
+        return;
+    }
+    let sample = points[index].sample;
+    if index > 0u && points[index - 1u].sample == sample {
+        return;
+    }
+    var value = samples[sample];
+    var hits = 0u;
+    var shadow_rays = 0u;
+    for (var i = index; i < params.item_count && points[i].sample == sample; i++) {
+        let point = points[i];
+        if point.hit == 0u {
+            continue;
+        }
+        let light = direct[i];
+        let shaded = point.emissive + light.radiance;
+        value = vec4<f32>(
+            value.xyz + vec3<f32>(mul(point.weight.x, shaded.x), mul(point.weight.y, shaded.y), mul(point.weight.z, shaded.z)),
+            select(value.w, 1.0, point.depth == 0u),
+        );
+        hits += 1u;
+        shadow_rays += light.shadow_rays;
+    }
+    samples[sample] = value;
+    atomicAdd(&counters[0], hits);
+    atomicAdd(&counters[1], shadow_rays);
+}

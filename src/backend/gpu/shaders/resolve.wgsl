@@ -1,0 +1,25 @@
+// The band's pixels (`band.rs`'s `resolve`): each the mean of its
+// samples' radiance, summed in sample order, with the share of samples
+// a camera ray covered as alpha. Samples per pixel: the band's samples
+// over its pixels.
+
+@group(0) @binding(1) var<storage, read> samples: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> pixels: array<vec4<f32>>;
+
+@compute @workgroup_size(64)
+fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
+    let pixel = id.x;
+    if pixel >= params.item_count {
+        return;
+    }
+    let spp = arrayLength(&samples) / params.item_count;
+    var colour = vec3<f32>(0.0);
+    var covered = 0u;
+    for (var s = 0u; s < spp; s++) {
+        let sample = samples[pixel * spp + s];
+        colour += sample.xyz;
+        covered += select(0u, 1u, sample.w != 0.0);
+    }
+    let n = f32(spp);
+    pixels[pixel] = vec4<f32>(div(colour.x, n), div(colour.y, n), div(colour.z, n), div(f32(covered), n));
+}

@@ -1,0 +1,40 @@
+// Compaction, step 1: each workgroup's 64 counts scanned in workgroup
+// memory into exclusive offsets within the workgroup, and the group's
+// total. Integer sums: the order of the additions cannot change them.
+
+@group(0) @binding(1) var<storage, read> counts: array<u32>;
+@group(0) @binding(7) var<storage, read_write> local_offsets: array<u32>;
+@group(0) @binding(18) var<storage, read_write> block_totals: array<u32>;
+
+var<workgroup> scanned: array<u32, 64>;
+
+@compute @workgroup_size(64)
+fn scan_blocks(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+    @builtin(workgroup_id) group: vec3<u32>,
+) {
+    var count = 0u;
+    if id.x < params.item_count {
+        count = counts[id.x];
+    }
+    scanned[lane] = count;
+    workgroupBarrier();
+    // Hillis–Steele: after the step of width w each lane holds the sum
+    // of the 2w lanes ending at it.
+    for (var width = 1u; width < 64u; width *= 2u) {
+        var add = 0u;
+        if lane >= width {
+            add = scanned[lane - width];
+        }
+        workgroupBarrier();
+        scanned[lane] += add;
+        workgroupBarrier();
+    }
+    if id.x < params.item_count {
+        local_offsets[id.x] = scanned[lane] - count;
+    }
+    if lane == 63u {
+        block_totals[group.x] = scanned[63];
+    }
+}
