@@ -39,7 +39,7 @@ pub struct Frame<'a> {
     pub pipelines: &'a Pipelines,
     pub scene: &'a GpuScene,
     pub scene_surfaces: &'a SceneSurfaces,
-    pub frame_surfaces: FrameSurfaces,
+    pub frame_surfaces: &'a FrameSurfaces,
     pub lights: FrameLights,
 }
 
@@ -153,7 +153,7 @@ impl Frame<'_> {
     fn record_points(&self, encoder: &mut wgpu::CommandEncoder, level: &LevelBuffers) {
         let (context, pipelines, scene) = (self.context, self.pipelines, self.scene);
         (pipelines.queries).record_closest(context, encoder, scene, level);
-        let surfaces = (self.scene_surfaces, &self.frame_surfaces);
+        let surfaces = (self.scene_surfaces, self.frame_surfaces);
         (pipelines.surfaces).record(context, encoder, scene, surfaces.0, surfaces.1, level);
     }
 

@@ -79,6 +79,8 @@ pub struct GpuBackend {
     /// Its scene's meshes and textures, and the world they were uploaded
     /// with.
     scene_surfaces: Option<(u64, SceneSurfaces)>,
+    /// The last frame's placement, as uploaded.
+    frame_surfaces: Option<FrameSurfaces>,
 }
 
 impl GpuBackend {
@@ -92,6 +94,7 @@ impl GpuBackend {
             context,
             scene: None,
             scene_surfaces: None,
+            frame_surfaces: None,
         })
     }
 
@@ -134,28 +137,25 @@ impl GpuBackend {
 
     /// Uploads what `job`'s frame needs that the GPU does not hold yet:
     /// the world as it moved, the scene's meshes and textures for a new
-    /// world, and the frame's lights and placement.
-    fn upload_frame(&mut self, job: &FrameJob) -> Result<(FrameSurfaces, FrameLights), GpuError> {
+    /// world, the frame's placement where it changed, and its lights.
+    fn upload_frame(&mut self, job: &FrameJob) -> Result<FrameLights, GpuError> {
         let context = &self.context;
         Self::upload(&mut self.scene, context, job.world)?;
         let world = job.world.id();
         if self.scene_surfaces.as_ref().map(|(id, _)| *id) != Some(world) {
             self.scene_surfaces = Some((world, SceneSurfaces::upload(context, job.scene)?));
+            self.frame_surfaces = None;
         }
-        Ok((
-            FrameSurfaces::upload(context, job.frame)?,
-            FrameLights::upload(context, &job.frame.lights)?,
-        ))
+        FrameSurfaces::update(&mut self.frame_surfaces, context, job.frame)?;
+        FrameLights::upload(context, &job.frame.lights)
     }
 
     /// `job`'s frame, whose uploads [`GpuBackend::upload_frame`] made.
-    fn frame<'a>(
-        &'a self,
-        job: &'a FrameJob<'a>,
-        (frame_surfaces, lights): (FrameSurfaces, FrameLights),
-    ) -> Frame<'a> {
-        let (Some(scene), Some((_, scene_surfaces))) = (&self.scene, &self.scene_surfaces) else {
-            unreachable!("the world and its scene are uploaded with the frame");
+    fn frame<'a>(&'a self, job: &'a FrameJob<'a>, lights: FrameLights) -> Frame<'a> {
+        let (Some(scene), Some((_, scene_surfaces)), Some(frame_surfaces)) =
+            (&self.scene, &self.scene_surfaces, &self.frame_surfaces)
+        else {
+            unreachable!("the world, its scene and the frame are uploaded with the frame");
         };
         Frame {
             job,
@@ -181,8 +181,8 @@ impl GpuBackend {
             return Err(GpuError::LightMeshOnGpu.into());
         }
         let start = Instant::now();
-        let uploads = self.upload_frame(job)?;
-        let frame = self.frame(job, uploads);
+        let lights = self.upload_frame(job)?;
+        let frame = self.frame(job, lights);
         stats.add_stage_time("upload", start.elapsed().as_secs_f64());
         self.pool.install(|| {
             let mut pixels = Vec::with_capacity((job.width * job.height) as usize);
@@ -205,8 +205,8 @@ impl GpuBackend {
         job: &FrameJob,
         rays: &[Ray],
     ) -> Result<Vec<Option<ShadingPoint>>, GpuError> {
-        let uploads = self.upload_frame(job)?;
-        self.frame(job, uploads).shading_points(rays)
+        let lights = self.upload_frame(job)?;
+        self.frame(job, lights).shading_points(rays)
     }
 }
 

@@ -9,6 +9,8 @@
 //! The points stay on the GPU for formula (1), the film and the Whitted
 //! recursion; only `--method area` reads them back, to sample lamps.
 
+use std::sync::Arc;
+
 use bytemuck::{Pod, Zeroable};
 use glam::{Affine3A, Mat3, Vec3};
 
@@ -18,7 +20,8 @@ use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::trace::HitRecord;
 use crate::accel::{cofactor_map, Ray};
-use crate::render::frame::FrameScene;
+use crate::anim::deform::DeformedMesh;
+use crate::render::frame::{FrameScene, PlacedObject};
 use crate::render::material::SurfaceMaterial;
 use crate::render::surface::ShadingPoint;
 use crate::scene::{Material, SceneDesc, TextureRef, Wrap};
@@ -279,17 +282,58 @@ fn wrap_mode(wrap: Wrap) -> u32 {
 }
 
 /// A frame's placement on the GPU: its objects, its materials as animated
-/// (the default material last) and its deformed meshes.
+/// (the default material last) and its deformed meshes; and what they were
+/// made from, so that a frame placed as the last was uploads nothing (a
+/// fly-through over still objects, or a still frame).
 pub struct FrameSurfaces {
     objects: wgpu::Buffer,
     materials: wgpu::Buffer,
     deformed: wgpu::Buffer,
+    placed: Placement,
+}
+
+/// The parts of a [`FrameScene`] the shading-point pass reads.
+#[derive(PartialEq)]
+struct Placement {
+    objects: Vec<PlacedObject>,
+    materials: Vec<Material>,
+    deformed: Vec<Option<Arc<DeformedMesh>>>,
+}
+
+impl Placement {
+    fn of(frame: &FrameScene) -> Placement {
+        Placement {
+            objects: frame.objects.clone(),
+            materials: frame.materials.clone(),
+            deformed: frame.deformed.clone(),
+        }
+    }
 }
 
 impl FrameSurfaces {
-    pub fn upload(context: &GpuContext, frame: &FrameScene) -> Result<FrameSurfaces, GpuError> {
+    /// Brings `surfaces` up to `frame`, uploading only when its placement
+    /// differs from the one uploaded.
+    pub fn update<'s>(
+        surfaces: &'s mut Option<FrameSurfaces>,
+        context: &GpuContext,
+        frame: &FrameScene,
+    ) -> Result<&'s FrameSurfaces, GpuError> {
+        let placed = Placement::of(frame);
+        if surfaces
+            .as_ref()
+            .is_some_and(|current| current.placed != placed)
+        {
+            *surfaces = None;
+        }
+        match surfaces {
+            Some(current) => Ok(current),
+            None => Ok(surfaces.insert(FrameSurfaces::upload(context, placed)?)),
+        }
+    }
+
+    fn upload(context: &GpuContext, placed: Placement) -> Result<FrameSurfaces, GpuError> {
         let mut deformed: Vec<f32> = Vec::new();
-        let objects: Vec<ObjectRecord> = (frame.objects.iter().zip(&frame.deformed))
+        let objects: Vec<ObjectRecord> = (placed.objects.iter().zip(&placed.deformed))
             .map(|(object, mesh)| {
                 let (positions, normals, normal_count) = match mesh {
                     Some(mesh) => {
@@ -312,7 +356,7 @@ impl FrameSurfaces {
                 }
             })
             .collect();
-        let materials: Vec<MaterialRecord> = (frame.materials.iter())
+        let materials: Vec<MaterialRecord> = (placed.materials.iter())
             .chain([&Material::default()])
             .map(MaterialRecord::from)
             .collect();
@@ -321,6 +365,7 @@ impl FrameSurfaces {
                 objects: storage(context, "objects", &objects)?,
                 materials: storage(context, "materials", &materials)?,
                 deformed: storage(context, "deformed meshes", &deformed)?,
+                placed,
             })
         })
     }
