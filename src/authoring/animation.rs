@@ -123,7 +123,6 @@ impl GltfBuilder {
                 )));
             }
             channel
-                .sampler
                 .validate()
                 .map_err(|problem| fault(format!("channel {index}: sampler {problem}")))?;
         }

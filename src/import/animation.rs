@@ -114,13 +114,15 @@ pub fn import(
                 channel: c,
                 pointer,
             };
-            let keys = reader.keys(&sampler, target, width, buffers)?;
-            keys.validate()
-                .map_err(|problem| fault(format!("sampler {} {problem}", reader.sampler)))?;
-            channels.push(Channel {
+            let channel = Channel {
                 target,
-                sampler: keys,
-            });
+                sampler: reader.keys(&sampler, target, width, buffers)?,
+            };
+            channel.validate().map_err(|problem| Fault::Rule {
+                path: format!("animations[{a}].samplers[{}]", reader.sampler),
+                rule: format!("{problem} (read by channel {c})"),
+            })?;
+            channels.push(channel);
         }
         clips.push(AnimationClip {
             name: animation.name().map(str::to_owned),
@@ -146,6 +148,8 @@ fn file_order<'d, 'p>(
     )
 }
 
+/// The channel's node and path, which `channel_targets.rs` has checked
+/// (the glTF crate unwraps both).
 fn node_target(channel: &gltf::animation::Channel) -> Target {
     let node = channel.target().node().index();
     match channel.target().property() {
