@@ -17,9 +17,12 @@ const READER: Version = Version { major: 2, minor: 0 };
 
 /// Checks `asset.version` and `asset.minVersion` of the raw document.
 pub fn check(document: &Value) -> Result<(), Fault> {
-    let asset = document
-        .get("asset")
-        .ok_or_else(|| rule("asset", "is missing; every glTF file states its version there"))?;
+    let asset = document.get("asset").ok_or_else(|| {
+        rule(
+            "asset",
+            "is missing; every glTF file states its version there",
+        )
+    })?;
     let version = asset
         .get("version")
         .ok_or_else(|| rule("asset.version", "is missing; glTF 2.0 requires it"))
@@ -67,7 +70,12 @@ impl Version {
     /// Parses `<major>.<minor>` (decimal digits only, as the schema's
     /// pattern `^[0-9]+\.[0-9]+$` has it).
     fn parse(path: &str, value: &Value) -> Result<Version, Fault> {
-        let malformed = || rule(path, &format!("is {value}, not a version of the form \"2.0\""));
+        let malformed = || {
+            rule(
+                path,
+                &format!("is {value}, not a version of the form \"2.0\""),
+            )
+        };
         let text = value.as_str().ok_or_else(malformed)?;
         let (major, minor) = text.split_once('.').ok_or_else(malformed)?;
         let number = |digits: &str| {
@@ -110,12 +118,18 @@ mod tests {
     #[test]
     fn other_versions_are_refused_with_the_path_and_the_rule() {
         let cases = [
-            (json!({ "version": "1.0" }), "asset.version: is \"1.0\": lmanim reads glTF 2.x"),
+            (
+                json!({ "version": "1.0" }),
+                "asset.version: is \"1.0\": lmanim reads glTF 2.x",
+            ),
             (json!({ "version": "3.0" }), "asset.version: is \"3.0\""),
             (json!({ "version": "2" }), "not a version of the form"),
             (json!({ "version": "2.0.1" }), "not a version of the form"),
             (json!({ "version": " 2.0" }), "not a version of the form"),
-            (json!({ "version": 2.0 }), "asset.version: is 2.0, not a version"),
+            (
+                json!({ "version": 2.0 }),
+                "asset.version: is 2.0, not a version",
+            ),
             (json!({}), "asset.version: is missing"),
             (
                 json!({ "version": "2.1", "minVersion": "2.1" }),

@@ -3,18 +3,17 @@
 //! channels are taken out after this, see `pointer.rs`).
 //!
 //! The glTF crate does not validate channel targets, yet its accessors
-//! unwrap them: a `target.node` past the file's nodes, or a `target.path`
-//! it does not know, would panic inside import. Everything else about a
-//! target (its type, a missing node) is the schema's to refuse.
+//! unwrap them: a `target.node` past the file's nodes would panic inside
+//! import. (A `target.path` glTF does not define is an extension's, which
+//! the spec lets a reader ignore: `animation.rs` skips its channel.)
+//! Everything else about a target (its type, a missing node) is the
+//! schema's to refuse.
 
 use serde_json::Value;
 
 use super::error::Fault;
 
-/// The `target.path` values of glTF 2.0, and KHR_animation_pointer's.
-const PATHS: &[&str] = &["translation", "rotation", "scale", "weights", "pointer"];
-
-/// Checks every channel's `target.node` and `target.path`.
+/// Checks every channel's `target.node`.
 pub fn check(document: &Value) -> Result<(), Fault> {
     let nodes = document
         .get("nodes")
@@ -28,17 +27,6 @@ pub fn check(document: &Value) -> Result<(), Fault> {
                 continue;
             };
             let at = |field: &str| format!("animations[{a}].channels[{c}].target.{field}");
-            if let Some(path) = target.get("path").and_then(Value::as_str) {
-                if !PATHS.contains(&path) {
-                    return Err(Fault::Rule {
-                        path: at("path"),
-                        rule: format!(
-                            "is {path:?}; a channel animates \"translation\", \"rotation\", \
-                             \"scale\" or \"weights\" (or a KHR_animation_pointer \"pointer\")"
-                        ),
-                    });
-                }
-            }
             if let Some(node) = target.get("node").and_then(Value::as_u64) {
                 if node >= nodes as u64 {
                     let plural = if nodes == 1 { "" } else { "s" };
@@ -68,10 +56,11 @@ mod tests {
     }
 
     #[test]
-    fn targets_in_range_with_known_paths_pass() {
+    fn targets_in_range_pass_whatever_their_path() {
         let channels = json!([
             { "sampler": 0, "target": { "node": 1, "path": "rotation" } },
             { "sampler": 0, "target": { "path": "pointer" } },
+            { "sampler": 0, "target": { "node": 0, "path": "visibility" } },
         ]);
         assert_eq!(message(channels), None);
     }
@@ -84,17 +73,9 @@ mod tests {
         ]);
         let message = message(channels).expect("node 2 of 2");
         assert!(
-            message.starts_with("animations[1].channels[1].target.node: is 2, but the file has 2 nodes"),
-            "{message}"
-        );
-    }
-
-    #[test]
-    fn an_unknown_path_is_refused() {
-        let channels = json!([{ "sampler": 0, "target": { "node": 0, "path": "colour" } }]);
-        let message = message(channels).expect("unknown path");
-        assert!(
-            message.starts_with("animations[1].channels[0].target.path: is \"colour\""),
+            message.starts_with(
+                "animations[1].channels[1].target.node: is 2, but the file has 2 nodes"
+            ),
             "{message}"
         );
     }

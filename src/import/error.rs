@@ -147,7 +147,7 @@ pub enum Fault {
     Camera { camera: usize, problem: String },
     #[error("material {material}: {problem}")]
     Material { material: usize, problem: String },
-    #[error("image {image} cannot be decoded: {reason}")]
+    #[error("images[{image}] cannot be read or decoded: {reason}")]
     Image { image: usize, reason: String },
     /// A panic inside import (ours or a dependency's): a bug, reported as a
     /// fault of this file rather than a crash of a whole batch.

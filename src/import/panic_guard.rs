@@ -44,9 +44,9 @@ pub fn run<T>(work: impl FnOnce() -> Result<T, Fault>) -> Result<T, Fault> {
     outcome.unwrap_or_else(|_| {
         let description = LAST_PANIC.with(|last| last.borrow_mut().take());
         // Without a description, another hook replaced ours after install.
-        Err(Fault::Panic(
-            description.unwrap_or_else(|| "a panic (its message went to another hook)".into()),
-        ))
+        Err(Fault::Panic(description.unwrap_or_else(|| {
+            "a panic (its message went to another hook)".into()
+        })))
     })
 }
 
@@ -94,7 +94,10 @@ mod tests {
             "{stdout}"
         );
         assert!(!stderr.contains("guarded 42"), "{stderr}");
-        assert!(stderr.contains("panicked") && stderr.contains("unguarded"), "{stderr}");
+        assert!(
+            stderr.contains("panicked") && stderr.contains("unguarded"),
+            "{stderr}"
+        );
     }
 
     #[test]

@@ -116,10 +116,13 @@ fn strides(root: &json::Root) -> Result<(), Fault> {
         };
         let view_index = accessor.buffer_view.map(|view| view.value());
         let view = view_index.and_then(|index| root.buffer_views.get(index).map(|v| (index, v)));
-        let Some((v, json::buffer::View {
-            byte_stride: Some(stride),
-            ..
-        })) = view
+        let Some((
+            v,
+            json::buffer::View {
+                byte_stride: Some(stride),
+                ..
+            },
+        )) = view
         else {
             continue;
         };

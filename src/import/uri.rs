@@ -49,12 +49,21 @@ pub fn read(uri: &str, base: &Path, resource: Resource) -> Result<Vec<u8>, Strin
 /// Checks the part of a data URI before its comma: `<media type>[;<param>]*;base64`.
 /// An empty media type is `text/plain` (RFC 2397).
 fn check_data_header(after_scheme: &str, resource: Resource) -> Result<(), String> {
-    let header = after_scheme.split_once(',').map_or(after_scheme, |(header, _)| header);
+    let header = after_scheme
+        .split_once(',')
+        .map_or(after_scheme, |(header, _)| header);
     let mut parts = header.split(';');
     let media_type = parts.next().unwrap_or_default();
     let allowed = resource.media_types();
-    if !allowed.iter().any(|allowed| allowed.eq_ignore_ascii_case(media_type)) {
-        let media_type = if media_type.is_empty() { "text/plain" } else { media_type };
+    if !allowed
+        .iter()
+        .any(|allowed| allowed.eq_ignore_ascii_case(media_type))
+    {
+        let media_type = if media_type.is_empty() {
+            "text/plain"
+        } else {
+            media_type
+        };
         return Err(format!(
             "its data URI has media type {media_type:?}; glTF allows only {} for {}",
             allowed.join(" or "),
@@ -108,7 +117,12 @@ mod tests {
 
     #[test]
     fn network_schemes_are_refused() {
-        let error = read("https://example.com/a.bin", Path::new("."), Resource::Buffer).unwrap_err();
+        let error = read(
+            "https://example.com/a.bin",
+            Path::new("."),
+            Resource::Buffer,
+        )
+        .unwrap_err();
         assert!(error.contains("https"), "{error}");
     }
 
@@ -116,15 +130,38 @@ mod tests {
     fn data_uris_need_their_resource_s_media_type_and_base64() {
         let read = |uri: &str, resource| read(uri, Path::new("."), resource);
         assert_eq!(
-            read("data:application/gltf-buffer;base64,AAECAw==", Resource::Buffer),
+            read(
+                "data:application/gltf-buffer;base64,AAECAw==",
+                Resource::Buffer
+            ),
             Ok(vec![0, 1, 2, 3])
         );
         let cases = [
-            ("data:text/plain;base64,AAAA", Resource::Buffer, "media type \"text/plain\""),
-            ("data:;base64,AAAA", Resource::Buffer, "media type \"text/plain\""),
-            ("data:image/png;base64,AAAA", Resource::Buffer, "application/octet-stream or"),
-            ("data:application/octet-stream;base64,AAAA", Resource::Image, "image/png or image/jpeg"),
-            ("data:application/octet-stream,%00%01", Resource::Buffer, "not base64"),
+            (
+                "data:text/plain;base64,AAAA",
+                Resource::Buffer,
+                "media type \"text/plain\"",
+            ),
+            (
+                "data:;base64,AAAA",
+                Resource::Buffer,
+                "media type \"text/plain\"",
+            ),
+            (
+                "data:image/png;base64,AAAA",
+                Resource::Buffer,
+                "application/octet-stream or",
+            ),
+            (
+                "data:application/octet-stream;base64,AAAA",
+                Resource::Image,
+                "image/png or image/jpeg",
+            ),
+            (
+                "data:application/octet-stream,%00%01",
+                Resource::Buffer,
+                "not base64",
+            ),
         ];
         for (uri, resource, words) in cases {
             let reason = read(uri, resource).expect_err(uri);

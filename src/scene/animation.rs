@@ -354,7 +354,13 @@ mod tests {
     }
 
     fn rotation(interpolation: Interpolation, values: &[f32]) -> Channel {
-        let keys = values.len() / 4 / if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
+        let keys = values.len()
+            / 4
+            / if interpolation == Interpolation::CubicSpline {
+                3
+            } else {
+                1
+            };
         Channel {
             target: Target::Rotation(0),
             sampler: Sampler {
@@ -378,7 +384,10 @@ mod tests {
         );
         let cubic = rotation(Interpolation::CubicSpline, &[zero, identity, zero].concat());
         assert_eq!(cubic.validate(), Ok(()));
-        let cubic_zero = rotation(Interpolation::CubicSpline, &[identity, zero, identity].concat());
+        let cubic_zero = rotation(
+            Interpolation::CubicSpline,
+            &[identity, zero, identity].concat(),
+        );
         assert!(cubic_zero.validate().is_err());
         // Only rotations are quaternions: zeros elsewhere are values.
         let translation = Channel {
