@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use proptest::prelude::*;
-use proptest::test_runner::{Config, RngSeed, TestRunner};
+use proptest::test_runner::{Config, RngSeed, TestError, TestRunner};
 use serde_json::{json, Value};
 
 use import_support::{glb, one_triangle_document, Bin};
@@ -69,7 +69,8 @@ fn strip_glb(dir: &Path) -> Seed {
     doc["nodes"] = json!([{ "children": [1], "translation": [1.0, 2.0, 3.0] },
         { "mesh": 0, "camera": 0 }]);
     doc["materials"] = json!([{ "pbrMetallicRoughness": { "baseColorFactor": [1, 0.5, 0.2, 1] } }]);
-    doc["cameras"] = json!([{ "type": "perspective", "perspective": { "yfov": 0.8, "znear": 0.1 } }]);
+    doc["cameras"] =
+        json!([{ "type": "perspective", "perspective": { "yfov": 0.8, "znear": 0.1 } }]);
     let bytes = std::fs::read(bin.write_glb(doc, dir, "strip.glb")).expect("read seed");
     let chunk = |at: usize| {
         let length = u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes")) as usize;
@@ -317,12 +318,11 @@ fn mutated_files_never_make_import_panic() {
             .or_default() += 1;
         if let Err(error) = &result {
             let message = error.to_string();
-            if matches!(error.fault, lmanim::import::Fault::Panic(_)) {
-                std::fs::create_dir_all(&crashes).expect("crash folder");
-                let kept = crashes.join(format!("crash-{:016x}.{extension}", fingerprint(&bytes)));
-                std::fs::write(&kept, &bytes).expect("keep crash");
-                return Err(TestCaseError::fail(format!("{message} (kept as {})", kept.display())));
-            }
+            prop_assert!(
+                !matches!(error.fault, lmanim::import::Fault::Panic(_)),
+                "{}",
+                message
+            );
             prop_assert_eq!(message.lines().count(), 1, "{}", message);
         }
         Ok(())
@@ -339,12 +339,24 @@ fn mutated_files_never_make_import_panic() {
         println!("  {count:6}  {kind}");
     }
     if let Err(failure) = result {
+        // The shrunk case, as a file to keep under tests/import_regressions/.
+        if let TestError::Fail(_, mutation) = &failure {
+            let extension = if mutation.glb { "glb" } else { "gltf" };
+            let bytes = file_bytes(&seeds[mutation.seed], mutation);
+            std::fs::create_dir_all(&crashes).expect("crash folder");
+            let kept = crashes.join(format!("crash-{:016x}.{extension}", fingerprint(&bytes)));
+            std::fs::write(&kept, &bytes).expect("keep the crash");
+            println!("the smallest failing file is kept as {}", kept.display());
+        }
         panic!("{failure}");
     }
     // The mutations reach deep: past the JSON, into references, data and
     // animation, not only the container and the parser.
     for deep in ["Ok", "Invalid", "AccessorType", "Animation"] {
-        assert!(outcomes.contains_key(deep), "no case reached {deep}: {outcomes:?}");
+        assert!(
+            outcomes.contains_key(deep),
+            "no case reached {deep}: {outcomes:?}"
+        );
     }
 }
 
