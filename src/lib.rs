@@ -4,7 +4,6 @@
 
 pub mod accel;
 pub mod anim;
-pub mod authoring;
 pub mod backend;
 pub mod bits;
 pub mod import;
