@@ -52,7 +52,12 @@ pub fn run<T>(work: impl FnOnce() -> Result<T, Fault>) -> Result<T, Fault> {
 
 /// The panic's message and the source line that raised it, for a report.
 fn describe(info: &PanicHookInfo) -> String {
-    let message = info.payload_as_str().unwrap_or("a panic without a message");
+    let payload = info.payload();
+    let message = payload
+        .downcast_ref::<&str>()
+        .copied()
+        .or_else(|| payload.downcast_ref::<String>().map(String::as_str))
+        .unwrap_or("a panic without a message");
     match info.location() {
         Some(at) => format!("{message} (at {}:{})", at.file(), at.line()),
         None => message.to_owned(),

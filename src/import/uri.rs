@@ -73,7 +73,7 @@ fn check_data_header(after_scheme: &str, resource: Resource) -> Result<(), Strin
             }
         ));
     }
-    if parts.last() != Some("base64") {
+    if parts.next_back() != Some("base64") {
         return Err("its data URI is not base64; glTF data URIs must be".to_owned());
     }
     Ok(())
