@@ -206,7 +206,7 @@ pub fn courtyard() -> Result<GltfBuilder, AuthoringError> {
     )?;
 
     // Three lamps of different colours and sizes: wide and narrow
-    // penumbrae side by side. Intensities in W/sr (see DESIGN.md).
+    // penumbrae side by side. Intensities in W/sr (see ARCHITECTURE.md, "Conventions").
     let lamps = [
         (
             "Lamp.Warm",
