@@ -17,11 +17,11 @@
 use std::path::Path;
 use std::time::Instant;
 
-use lmanim::authoring::city::{city_block, CityParams};
 use lmanim::backend::Backend;
 use lmanim::sequence::Sequence;
 use lmanim::settings::{Method, Settings};
 use lmanim::stats::FrameStats;
+use lmanim_authoring::city::{city_block, CityParams};
 
 fn main() {
     let quick = std::env::var_os("LMANIM_BENCH_QUICK").is_some();

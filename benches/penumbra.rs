@@ -8,13 +8,13 @@
 //! in `src/lightmesh/spacing.rs` is chosen from it (BENCHMARKS.md).
 
 use glam::{Quat, Vec2, Vec3};
-use lmanim::authoring::{shapes, GltfBuilder, NodeDesc, Primitive};
 use lmanim::backend::Backend;
 use lmanim::output::Image;
 use lmanim::scene::{Camera, Light, LightKind, Material, Projection};
 use lmanim::sequence::Sequence;
 use lmanim::settings::{Method, Settings};
 use lmanim::stats::FrameStats;
+use lmanim_authoring::{shapes, GltfBuilder, NodeDesc, Primitive};
 
 const LAMP_HEIGHT: f32 = 2.0;
 const OCCLUDER_HEIGHT: f32 = 1.0;

@@ -1,10 +1,9 @@
 //! lmanim renders glTF animations to EXR image sequences, with soft shadows
 //! from point lights by the Light Meshes Method (Debelov, Vasilyeva,
-//! Novikov). See DESIGN.md for the data flow of one run.
+//! Novikov). ARCHITECTURE.md describes the data flow of one run.
 
 pub mod accel;
 pub mod anim;
-pub mod authoring;
 pub mod backend;
 pub mod bits;
 pub mod import;

@@ -4,8 +4,8 @@
 
 mod anim_support;
 
-use lmanim::authoring::{shapes, GltfBuilder, NodeDesc, Primitive};
 use lmanim::scene::{Interpolation, JointSet, Skin, Target};
+use lmanim_authoring::{shapes, GltfBuilder, NodeDesc, Primitive};
 
 #[test]
 fn clips_skins_and_morph_targets_import_as_written() {

@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use glam::{Vec2, Vec3};
-use lmanim::authoring::{shapes, GltfBuilder, NodeDesc, Primitive};
 use lmanim::scene::{Light, LightKind, Material};
+use lmanim_authoring::{shapes, GltfBuilder, NodeDesc, Primitive};
 
 /// Runs the binary outside the repository, so that its default light-mesh
 /// cache (`cache/` in the current directory) never lands in the tree.

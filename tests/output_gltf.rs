@@ -5,8 +5,8 @@
 use std::path::Path;
 
 use glam::{Quat, Vec2, Vec3, Vec4};
-use lmanim::authoring::{look_at_rotation, shapes, GltfBuilder, NodeDesc, Primitive};
 use lmanim::scene::{Camera, Light, LightKind, Material, Projection};
+use lmanim_authoring::{look_at_rotation, shapes, GltfBuilder, NodeDesc, Primitive};
 
 fn sample() -> GltfBuilder {
     let mut builder = GltfBuilder::new();

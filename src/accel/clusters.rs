@@ -1,7 +1,7 @@
 //! Fixed spatial clusters of a dynamic object's triangles, so that a
 //! deformation can say *where* the object changed, not only that it did:
 //! the scheduler turns the boxes of the clusters whose vertices moved into
-//! the light mesh's changed regions (DESIGN.md, "Invalidation rule"). A
+//! the light mesh's changed regions (ARCHITECTURE.md, "The light mesh"). A
 //! swaying tree crown then invalidates the bits whose segments pass near
 //! its surface, not every bit whose segment crosses its bounding box.
 //!

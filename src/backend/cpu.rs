@@ -2,7 +2,7 @@
 //! loop over independent items, run band by band so memory stays bounded
 //! at any resolution and sample count.
 //!
-//! Stages (DESIGN.md, "One frame, as stages"): `primary` (camera rays over
+//! Stages (ARCHITECTURE.md, "A frame as stages"): `primary` (camera rays over
 //! 16×16 tiles), `secondary` (the Whitted recursion, level by level), for
 //! the light-mesh methods `demand` and `fill` (node masks), then `shade`
 //! (formula (1), formula (2) or the spherical-lamp reference per shading

@@ -297,7 +297,7 @@ impl Use<'_, '_> {
 }
 
 /// The glTF spec's name of an accessor `type`, as a user sees it in the file.
-fn dimensions_name(dimensions: Dimensions) -> &'static str {
+pub fn dimensions_name(dimensions: Dimensions) -> &'static str {
     match dimensions {
         Dimensions::Scalar => "SCALAR",
         Dimensions::Vec2 => "VEC2",
@@ -310,7 +310,7 @@ fn dimensions_name(dimensions: Dimensions) -> &'static str {
 }
 
 /// The glTF spec's name of a `componentType`.
-fn component_name(data_type: DataType) -> &'static str {
+pub fn component_name(data_type: DataType) -> &'static str {
     match data_type {
         DataType::I8 => "BYTE",
         DataType::U8 => "UNSIGNED_BYTE",

@@ -10,6 +10,7 @@
 use std::fmt;
 
 use gltf::animation::{Interpolation as FileInterpolation, Property};
+use gltf::json::validation::Checked;
 
 use super::accessor::Use;
 use super::error::Fault;
@@ -36,12 +37,16 @@ pub struct Animations {
     pub skipped: Vec<SkippedChannel>,
 }
 
-/// A KHR_animation_pointer channel that import leaves out, and why.
+/// A channel that import leaves out, and why: a KHR_animation_pointer
+/// to something lmanim does not animate, or a `target.path` that glTF 2.0
+/// does not define (an extension's, which the spec lets a reader ignore).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SkippedChannel {
     pub animation: usize,
     pub channel: usize,
-    pub pointer: String,
+    /// What the channel targets, as the file says it:
+    /// `KHR_animation_pointer "/nodes/0/scale"`, `path "visibility"`.
+    pub target: String,
     pub reason: String,
 }
 
@@ -49,8 +54,8 @@ impl fmt::Display for SkippedChannel {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "animation {} channel {}: KHR_animation_pointer {:?} {}; the channel is skipped",
-            self.animation, self.channel, self.pointer, self.reason
+            "animation {} channel {}: {} {}; the channel is skipped",
+            self.animation, self.channel, self.target, self.reason
         )
     }
 }
@@ -80,18 +85,34 @@ pub fn import(
                 channel: c,
                 problem,
             };
+            let mut skip = |target: String, reason: String| {
+                skipped.push(SkippedChannel {
+                    animation: a,
+                    channel: c,
+                    target,
+                    reason,
+                })
+            };
             let (target, sampler, pointer) = match source {
-                Source::Node(channel) => (node_target(&channel), channel.sampler(), None),
+                Source::Node(channel) => match node_target(document, &channel) {
+                    Ok(target) => (target, channel.sampler(), None),
+                    Err(UnknownPath) => {
+                        skip(
+                            "target.path".into(),
+                            "is not one glTF 2.0 defines (an extension's, which lmanim does not read)"
+                                .into(),
+                        );
+                        continue;
+                    }
+                },
                 Source::Pointer(channel) => {
                     let target = match channel.target(scene) {
                         Ok(target) => target,
                         Err(reason) => {
-                            skipped.push(SkippedChannel {
-                                animation: a,
-                                channel: c,
-                                pointer: channel.pointer.clone(),
+                            skip(
+                                format!("KHR_animation_pointer {:?}", channel.pointer),
                                 reason,
-                            });
+                            );
                             continue;
                         }
                     };
@@ -114,13 +135,15 @@ pub fn import(
                 channel: c,
                 pointer,
             };
-            let keys = reader.keys(&sampler, target, width, buffers)?;
-            keys.validate()
-                .map_err(|problem| fault(format!("sampler {} {problem}", reader.sampler)))?;
-            channels.push(Channel {
+            let channel = Channel {
                 target,
-                sampler: keys,
-            });
+                sampler: reader.keys(&sampler, target, width, buffers)?,
+            };
+            channel.validate().map_err(|problem| Fault::Rule {
+                path: format!("animations[{a}].samplers[{}]", reader.sampler),
+                rule: format!("{problem} (read by channel {c})"),
+            })?;
+            channels.push(channel);
         }
         clips.push(AnimationClip {
             name: animation.name().map(str::to_owned),
@@ -146,14 +169,29 @@ fn file_order<'d, 'p>(
     )
 }
 
-fn node_target(channel: &gltf::animation::Channel) -> Target {
+/// A channel's `target.path` that glTF 2.0 does not define.
+struct UnknownPath;
+
+/// The channel's node and property (`channel_targets.rs` has checked the
+/// node, which the glTF crate unwraps), unless its path is unknown (the
+/// crate would unwrap that too).
+fn node_target(
+    document: &gltf::Document,
+    channel: &gltf::animation::Channel,
+) -> Result<Target, UnknownPath> {
+    // The crate's own indices of the channel it handed out.
+    let json =
+        &document.as_json().animations[channel.animation().index()].channels[channel.index()];
+    if matches!(json.target.path, Checked::Invalid) {
+        return Err(UnknownPath);
+    }
     let node = channel.target().node().index();
-    match channel.target().property() {
+    Ok(match channel.target().property() {
         Property::Translation => Target::Translation(node),
         Property::Rotation => Target::Rotation(node),
         Property::Scale => Target::Scale(node),
         Property::MorphTargetWeights => Target::Weights(node),
-    }
+    })
 }
 
 /// Morph targets of `node`'s mesh (0 without a mesh or targets).

@@ -30,7 +30,7 @@ fn load_one(buffer: &gltf::Buffer, bin: Option<&[u8]>, base: &Path) -> Result<Ve
             reason: "the file has no BIN chunk".to_owned(),
         })?,
         gltf::buffer::Source::Uri(text) => {
-            uri::read(text, base).map_err(|reason| Fault::BufferSource {
+            uri::read(text, base, uri::Resource::Buffer).map_err(|reason| Fault::BufferSource {
                 buffer: buffer.index(),
                 uri: shorten(text),
                 reason,

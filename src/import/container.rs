@@ -14,6 +14,7 @@ use gltf::json;
 
 use super::error::Fault;
 use super::pointer::PointerChannels;
+use super::{asset, channel_targets, preflight};
 
 /// Extensions lmanim honours; a file that requires any other is refused,
 /// since rendering it without the extension would be wrong.
@@ -131,14 +132,26 @@ pub struct Parsed {
     pub pointers: PointerChannels,
 }
 
-/// Parses and validates the JSON. Checks that the glTF crate's own
-/// validation relies on (it indexes a primitive's POSITION accessor without a
-/// bounds check) run first.
+/// Parses and validates the JSON: first as plain JSON, where the rules
+/// that must hold before glTF's shape can be trusted are checked (the
+/// asset's version, channel targets) and KHR_animation_pointer channels
+/// are taken out; then as a glTF document, where every reference and
+/// property the glTF crate's accessors assume is checked (see
+/// `preflight.rs`) before the crate validates the rest.
 pub fn parse_document(json_bytes: &[u8]) -> Result<Parsed, Fault> {
-    let (mut root, pointers): (json::Root, _) = match json::deserialize::from_slice(json_bytes) {
-        Ok(root) => (root, PointerChannels::default()),
-        Err(error) => without_pointer_channels(json_bytes).unwrap_or(Err(Fault::Json(error)))?,
+    let mut raw: serde_json::Value = serde_json::from_slice(json_bytes).map_err(Fault::Json)?;
+    asset::check(&raw)?;
+    channel_targets::check(&raw)?;
+    let pointers = PointerChannels::take(&mut raw)?;
+    let filled = fill_scene_nodes(&mut raw);
+    // Parsing the bytes again keeps the line and column in a schema error;
+    // only a document that was changed must be parsed from its value.
+    let parsed = if pointers.is_empty() && !filled {
+        json::deserialize::from_slice(json_bytes)
+    } else {
+        serde_json::from_value(raw)
     };
+    let mut root: json::Root = parsed.map_err(Fault::Schema)?;
     if let Some(extension) = root
         .extensions_required
         .iter()
@@ -150,7 +163,7 @@ pub fn parse_document(json_bytes: &[u8]) -> Result<Parsed, Fault> {
     // lmanim reads KHR_animation_pointer apart from it (see `pointer.rs`).
     root.extensions_required
         .retain(|name| name != ANIMATION_POINTER);
-    check_primitive_accessors(&root)?;
+    preflight::check(&root)?;
     let document = gltf::Document::from_json(root).map_err(|error| {
         // The crate's message starts with "invalid glTF:" too.
         let message = error.to_string();
@@ -160,43 +173,19 @@ pub fn parse_document(json_bytes: &[u8]) -> Result<Parsed, Fault> {
     Ok(Parsed { document, pointers })
 }
 
-/// The document without its KHR_animation_pointer channels, and those
-/// channels; None when it has none, so that the crate's own error stands.
-/// Such a channel has no `target.node`, which the glTF crate's schema
-/// requires, so the whole file would otherwise be refused.
-fn without_pointer_channels(
-    json_bytes: &[u8],
-) -> Option<Result<(json::Root, PointerChannels), Fault>> {
-    let mut document: serde_json::Value = serde_json::from_slice(json_bytes).ok()?;
-    let pointers = match PointerChannels::take(&mut document) {
-        Ok(pointers) if pointers.is_empty() => return None,
-        Ok(pointers) => pointers,
-        Err(fault) => return Some(Err(fault)),
+/// A scene's `nodes` is optional in glTF 2.0 (a scene may be empty), but
+/// the glTF crate requires it: a scene without it gets an empty list.
+/// True when some scene lacked it.
+fn fill_scene_nodes(raw: &mut serde_json::Value) -> bool {
+    let Some(scenes) = raw.get_mut("scenes").and_then(|s| s.as_array_mut()) else {
+        return false;
     };
-    Some(
-        serde_json::from_value(document)
-            .map(|root| (root, pointers))
-            .map_err(Fault::Json),
-    )
-}
-
-fn check_primitive_accessors(root: &json::Root) -> Result<(), Fault> {
-    for (m, mesh) in root.meshes.iter().enumerate() {
-        for (p, primitive) in mesh.primitives.iter().enumerate() {
-            let references = primitive
-                .attributes
-                .values()
-                .chain(primitive.indices.iter());
-            for accessor in references {
-                if accessor.value() >= root.accessors.len() {
-                    return Err(Fault::Invalid(format!(
-                        "mesh {m} primitive {p} names accessor {} but the file has {}",
-                        accessor.value(),
-                        root.accessors.len()
-                    )));
-                }
-            }
+    let mut filled = false;
+    for scene in scenes.iter_mut().filter_map(|scene| scene.as_object_mut()) {
+        if !scene.contains_key("nodes") {
+            scene.insert("nodes".to_owned(), serde_json::Value::Array(Vec::new()));
+            filled = true;
         }
     }
-    Ok(())
+    filled
 }

@@ -42,14 +42,24 @@ pub enum Fault {
     GlbLayout(String),
     #[error("malformed JSON: {0}")]
     Json(#[source] serde_json::Error),
+    /// Well-formed JSON that does not have glTF 2.0's shape (a missing
+    /// required property, a string where a number belongs).
+    #[error("not glTF 2.0 JSON: {0}")]
+    Schema(#[source] serde_json::Error),
+    /// A rule of the glTF 2.0 spec that the file breaks, at a JSON path
+    /// such as `animations[0].channels[2].target.node`.
+    #[error("{path}: {rule}")]
+    Rule { path: String, rule: String },
     #[error("requires extension {0}, which lmanim does not support")]
     UnsupportedExtension(String),
     /// The glTF crate's schema validation, or a reference check of our own.
     #[error("invalid glTF: {0}")]
     Invalid(String),
-    #[error("the file holds no scene")]
+    /// Valid glTF (`scenes` is optional), but not a picture: such a file
+    /// is a library of nodes, meshes and materials for other files to use.
+    #[error("the file holds no scene: it is a library of entities for other files to use, with nothing to render")]
     NoScene,
-    #[error("buffer {buffer} ({uri}) cannot be read: {reason}")]
+    #[error("buffers[{buffer}].uri ({uri}) cannot be read: {reason}")]
     BufferSource {
         buffer: usize,
         uri: String,
@@ -137,7 +147,7 @@ pub enum Fault {
     Camera { camera: usize, problem: String },
     #[error("material {material}: {problem}")]
     Material { material: usize, problem: String },
-    #[error("image {image} cannot be decoded: {reason}")]
+    #[error("images[{image}] cannot be read or decoded: {reason}")]
     Image { image: usize, reason: String },
     /// A panic inside import (ours or a dependency's): a bug, reported as a
     /// fault of this file rather than a crash of a whole batch.

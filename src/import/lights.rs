@@ -1,6 +1,6 @@
 //! KHR_lights_punctual lights, with lmanim's one extra: `extras.radius`,
 //! the radius in metres of the lamp a point light stands for, which sets the
-//! soft-shadow size (see DESIGN.md).
+//! soft-shadow size (see ARCHITECTURE.md, "Conventions").
 
 use glam::Vec3;
 use gltf::khr_lights_punctual::Kind;

@@ -32,16 +32,22 @@
 //! Not (yet) imported: morph targets' TANGENT offsets, textures other than
 //! base colour and emissive, texture transforms, UV sets other than 0.
 //!
-//! Bad files never panic: sizes, bounds and references are checked before
-//! anything is allocated or indexed (see `accessor.rs` and `buffers.rs`), and
-//! every fault is one [`ImportError`] line that names the file and the glTF
-//! object at fault. A panic that slips through anyway (a bug, here or in a
-//! dependency) is caught and reported the same way.
+//! Bad files never panic: the asset's version and every reference and
+//! property the glTF crate's accessors unwrap are checked on the JSON first
+//! (`asset.rs`, `channel_targets.rs`, `preflight.rs`), sizes and bounds
+//! before anything is allocated or indexed (`accessor.rs`, `buffers.rs`),
+//! and every fault is one [`ImportError`] line that names the file and the
+//! glTF object at fault, by JSON path where a spec rule is broken
+//! (`animations[0].channels[2].target.node: …`). A panic that slips
+//! through anyway (a bug, here or in a dependency) is caught and reported
+//! the same way, without panic text (`panic_guard.rs`).
 
 mod accessor;
 mod animation;
+mod asset;
 mod buffers;
 mod camera;
+mod channel_targets;
 mod container;
 mod error;
 mod lights;
@@ -50,13 +56,14 @@ mod mesh;
 mod morph;
 mod nodes;
 mod normals;
+mod panic_guard;
 mod pointer;
+mod preflight;
 mod skin;
 mod texture;
 mod topology;
 mod uri;
 
-use std::panic::{self, AssertUnwindSafe};
 use std::path::Path;
 
 pub use container::SUPPORTED_EXTENSIONS;
@@ -67,9 +74,7 @@ use animation::Animatable;
 
 /// Imports the glTF scene at `path`.
 pub fn load(path: &Path) -> Result<SceneDesc, ImportError> {
-    let outcome = panic::catch_unwind(AssertUnwindSafe(|| import(path)));
-    let result = outcome.unwrap_or_else(|payload| Err(Fault::Panic(panic_message(&*payload))));
-    result.map_err(|fault| ImportError {
+    panic_guard::run(|| import(path)).map_err(|fault| ImportError {
         file: path.to_path_buf(),
         fault,
     })
@@ -134,13 +139,4 @@ fn import(path: &Path) -> Result<SceneDesc, Fault> {
         skins,
         animations: animations.clips,
     })
-}
-
-/// The text a panic was raised with, when it is a string.
-fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
-    payload
-        .downcast_ref::<&str>()
-        .map(|text| (*text).to_owned())
-        .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "a panic without a message".to_owned())
 }

@@ -31,7 +31,9 @@ pub fn import(texture: &gltf::Texture, buffers: &[Vec<u8>], base: &Path) -> Resu
             let start = view.offset();
             buffers[view.buffer().index()][start..start + view.length()].to_vec()
         }
-        gltf::image::Source::Uri { uri, .. } => uri::read(uri, base).map_err(fault)?,
+        gltf::image::Source::Uri { uri, .. } => {
+            uri::read(uri, base, uri::Resource::Image).map_err(fault)?
+        }
     };
     let decoded = decode(&encoded).map_err(fault)?;
     let sampler = texture.sampler();

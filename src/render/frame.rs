@@ -90,7 +90,9 @@ pub enum CameraChoice<'a> {
 pub enum PlaceError {
     #[error("no camera named '{wanted}' (the scene has: {available})")]
     NoSuchCamera { wanted: String, available: String },
-    #[error("the scene has no camera and no geometry to frame with an automatic one")]
+    /// A valid scene (glTF allows an empty one) that gives no picture:
+    /// without geometry, no automatic camera can frame it.
+    #[error("nothing to render: the scene has no geometry and no camera")]
     NothingToFrame,
 }
 

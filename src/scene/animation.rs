@@ -18,6 +18,38 @@ pub struct Channel {
     pub sampler: Sampler,
 }
 
+/// A quaternion shorter than this is no rotation at all (glTF's are unit
+/// length; sampling normalises what exporters round a few ULPs off).
+const SHORTEST_ROTATION: f32 = 1e-6;
+
+impl Channel {
+    /// Checks the sampler ([`Sampler::validate`]) and what the target asks
+    /// of its values: a rotation's keys are quaternions that can be
+    /// normalised. (CUBICSPLINE tangents may be zero: they are not keys.)
+    pub fn validate(&self) -> Result<(), String> {
+        self.sampler.validate()?;
+        if !matches!(self.target, Target::Rotation(_)) {
+            return Ok(());
+        }
+        let sampler = &self.sampler;
+        let per_key = sampler.elements_per_key();
+        // The key's value is the middle element of a CUBICSPLINE triple.
+        let value = per_key / 2;
+        let keys = sampler.values.chunks_exact(per_key * sampler.width);
+        for (key, elements) in keys.enumerate() {
+            let quaternion = &elements[value * sampler.width..][..sampler.width];
+            let length = quaternion.iter().map(|c| c * c).sum::<f32>().sqrt();
+            if length < SHORTEST_ROTATION {
+                return Err(format!(
+                    "output key {key} is the rotation {quaternion:?}, of length {length}; \
+                     rotations must be unit quaternions"
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// What a channel drives. Node properties come from a channel's
 /// `target.node` and `path` (or a KHR_animation_pointer to a node); light,
 /// camera and material properties only from KHR_animation_pointer. Each
@@ -225,8 +257,8 @@ impl Sampler {
         self.times.last().copied().unwrap_or(0.0)
     }
 
-    /// Checks what sampling relies on: keys exist, times are finite and
-    /// strictly increasing, values are finite and there are as many as the
+    /// Checks what sampling relies on: keys exist, times are finite,
+    /// non-negative (glTF's timeline starts at 0) and strictly increasing, values are finite and there are as many as the
     /// keys, width and interpolation call for. Import and the authoring
     /// builder both check with this, so what one writes the other reads.
     pub fn validate(&self) -> Result<(), String> {
@@ -238,6 +270,12 @@ impl Sampler {
         }
         if let Some(key) = self.times.iter().position(|time| !time.is_finite()) {
             return Err(format!("key time {key} is not finite"));
+        }
+        if let Some(key) = self.times.iter().position(|&time| time < 0.0) {
+            return Err(format!(
+                "input key {key} is at {} s; animation times must not be negative",
+                self.times[key]
+            ));
         }
         if let Some(key) = self.times.windows(2).position(|pair| pair[0] >= pair[1]) {
             return Err(format!(
@@ -304,10 +342,63 @@ mod tests {
                 sampler(Interpolation::Linear, &[0.0], &[f32::INFINITY]),
                 "output value 0",
             ),
+            (
+                sampler(Interpolation::Linear, &[-1.0, 1.0], &[0.0, 1.0]),
+                "input key 0 is at -1 s; animation times must not be negative",
+            ),
         ];
         for (sampler, word) in cases {
             let message = sampler.validate().expect_err(word);
             assert!(message.contains(word), "{message}");
         }
+    }
+
+    fn rotation(interpolation: Interpolation, values: &[f32]) -> Channel {
+        let keys = values.len()
+            / 4
+            / if interpolation == Interpolation::CubicSpline {
+                3
+            } else {
+                1
+            };
+        Channel {
+            target: Target::Rotation(0),
+            sampler: Sampler {
+                interpolation,
+                times: (0..keys).map(|key| key as f32).collect(),
+                values: values.to_vec(),
+                width: 4,
+            },
+        }
+    }
+
+    #[test]
+    fn a_zero_rotation_key_is_refused_but_zero_tangents_are_not() {
+        let identity = [0.0, 0.0, 0.0, 1.0];
+        let zero = [0.0; 4];
+        let linear = rotation(Interpolation::Linear, &[identity, zero].concat());
+        let message = linear.validate().expect_err("zero key");
+        assert!(
+            message.starts_with("output key 1 is the rotation [0.0, 0.0, 0.0, 0.0]"),
+            "{message}"
+        );
+        let cubic = rotation(Interpolation::CubicSpline, &[zero, identity, zero].concat());
+        assert_eq!(cubic.validate(), Ok(()));
+        let cubic_zero = rotation(
+            Interpolation::CubicSpline,
+            &[identity, zero, identity].concat(),
+        );
+        assert!(cubic_zero.validate().is_err());
+        // Only rotations are quaternions: zeros elsewhere are values.
+        let translation = Channel {
+            target: Target::Translation(0),
+            sampler: Sampler {
+                interpolation: Interpolation::Linear,
+                times: vec![0.0, 1.0],
+                values: vec![0.0; 6],
+                width: 3,
+            },
+        };
+        assert_eq!(translation.validate(), Ok(()));
     }
 }

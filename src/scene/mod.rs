@@ -164,7 +164,7 @@ pub struct Light {
     /// Linear RGB colour.
     pub color: Vec3,
     /// Radiant intensity in W/sr for point and spot lights (1 cd is taken as
-    /// 1 W/sr, see DESIGN.md), irradiance in W/m² for directional lights.
+    /// 1 W/sr, see ARCHITECTURE.md, "Conventions"), irradiance in W/m² for directional lights.
     pub intensity: f32,
     /// Distance beyond which the light has no effect (None: unbounded).
     pub range: Option<f32>,

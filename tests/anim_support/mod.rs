@@ -8,12 +8,12 @@
 use std::path::{Path, PathBuf};
 
 use glam::{DMat4, DVec3, Quat, Vec3};
-use lmanim::authoring::Geometry;
-use lmanim::authoring::{GltfBuilder, NodeDesc, Primitive};
 use lmanim::scene::{
     AnimationClip, Camera, CameraProperty, Channel, Interpolation, JointSet, Light, LightKind,
     LightProperty, Material, MaterialProperty, MorphTarget, Projection, Sampler, Skin, Target,
 };
+use lmanim_authoring::Geometry;
+use lmanim_authoring::{GltfBuilder, NodeDesc, Primitive};
 
 /// Times that cover before the first key, between keys, on keys and after
 /// the last key of every model.
@@ -63,9 +63,9 @@ fn clip(name: &str, channels: Vec<Channel>) -> AnimationClip {
     }
 }
 
-fn cube(b: &mut GltfBuilder) -> lmanim::authoring::MeshId {
+fn cube(b: &mut GltfBuilder) -> lmanim_authoring::MeshId {
     let geometry = b
-        .add_geometry(&lmanim::authoring::shapes::cuboid(Vec3::splat(0.5)))
+        .add_geometry(&lmanim_authoring::shapes::cuboid(Vec3::splat(0.5)))
         .expect("cube");
     b.add_mesh(
         "cube",
@@ -364,7 +364,7 @@ pub fn skinned(dir: &Path) -> PathBuf {
 /// LINEAR weights, CUBICSPLINE weights, and a STEP hop.
 pub fn morph(dir: &Path) -> PathBuf {
     let mut b = GltfBuilder::new();
-    let mut geometry = lmanim::authoring::shapes::plane(glam::Vec2::splat(1.0));
+    let mut geometry = lmanim_authoring::shapes::plane(glam::Vec2::splat(1.0));
     let count = geometry.positions.len();
     geometry.morph_targets = vec![
         MorphTarget {
@@ -454,7 +454,7 @@ pub fn pointers(dir: &Path) -> PathBuf {
         })
         .expect("material");
     let geometry = b
-        .add_geometry(&lmanim::authoring::shapes::plane(glam::Vec2::ONE))
+        .add_geometry(&lmanim_authoring::shapes::plane(glam::Vec2::ONE))
         .expect("plane");
     let mesh = b
         .add_mesh(

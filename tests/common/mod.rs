@@ -187,7 +187,7 @@ pub fn pixel(image: &Image, x: u32, y: u32) -> Vec4 {
 /// The six faces of an axis-aligned cube of half-size `half` around
 /// `centre`, each counter-clockwise seen from outside (for [`add_quads`]).
 pub fn box_quads(centre: Vec3, half: f32) -> [[Vec3; 4]; 6] {
-    lmanim::authoring::shapes::CUBE_FACES.map(|(n, t1, t2)| {
+    lmanim_authoring::shapes::CUBE_FACES.map(|(n, t1, t2)| {
         let c = centre + n * half;
         [
             c + (-t1 - t2) * half,

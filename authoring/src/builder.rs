@@ -6,7 +6,7 @@ use std::collections::BTreeSet;
 
 use serde_json::{json, Map, Value};
 
-use crate::scene::{Camera, Light, Material};
+use lmanim::scene::{Camera, Light, Material};
 
 use super::{
     json, AuthoringError, CameraId, Geometry, GeometryId, LightId, MaterialId, MeshId, NodeDesc,
@@ -22,7 +22,7 @@ const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 
 /// Builds one glTF scene in memory; see the module docs of
-/// [`crate::authoring`]. Add parts bottom-up (geometry, then meshes, then
+/// [the crate](crate). Add parts bottom-up (geometry, then meshes, then
 /// nodes, children before parents); nodes nobody lists as a child become
 /// the scene's roots.
 #[derive(Clone, Debug, Default)]

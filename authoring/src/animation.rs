@@ -7,7 +7,7 @@
 
 use serde_json::{json, Value};
 
-use crate::scene::{pointer, AnimationClip, Interpolation, Sampler, Skin, Target, TargetKind};
+use lmanim::scene::{pointer, AnimationClip, Interpolation, Sampler, Skin, Target, TargetKind};
 
 use super::json::ANIMATION_POINTER;
 use super::{AuthoringError, GltfBuilder, MeshId, SkinId};
@@ -123,7 +123,6 @@ impl GltfBuilder {
                 )));
             }
             channel
-                .sampler
                 .validate()
                 .map_err(|problem| fault(format!("channel {index}: sampler {problem}")))?;
         }

@@ -6,8 +6,8 @@
 use glam::{Mat3, Mat4, Quat, Vec3};
 
 use super::cell_noise;
-use crate::authoring::{shapes, Geometry};
-use crate::scene::JointSet;
+use crate::{shapes, Geometry};
+use lmanim::scene::JointSet;
 
 /// Appends a planar quad whose front faces `facing`: the corners are
 /// given in order around the quad, either way round.

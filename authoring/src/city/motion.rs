@@ -6,8 +6,8 @@ use std::f32::consts::TAU;
 
 use glam::{Quat, Vec2, Vec3};
 
-use crate::authoring::look_at_rotation;
-use crate::scene::{Interpolation, Sampler};
+use crate::look_at_rotation;
+use lmanim::scene::{Interpolation, Sampler};
 
 /// Length of the city's clip, seconds: 240 frames at 24 fps.
 pub(super) const DURATION: f32 = 10.0;

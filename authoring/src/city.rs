@@ -18,7 +18,7 @@ use super::{
     look_at_rotation, matte, shapes, AuthoringError, GeometryId, GltfBuilder, MaterialId, MeshId,
     NodeDesc, NodeId, Primitive,
 };
-use crate::scene::{AnimationClip, Camera, Channel, Light, LightKind, Projection, Skin, Target};
+use lmanim::scene::{AnimationClip, Camera, Channel, Light, LightKind, Projection, Skin, Target};
 use motion::{FlyThrough, Route};
 
 /// The shape of a generated city block.

@@ -5,7 +5,7 @@
 
 use serde_json::{json, Map, Value};
 
-use crate::scene::{Camera, Light, LightKind, Material, Projection};
+use lmanim::scene::{Camera, Light, LightKind, Material, Projection};
 
 use super::NodeDesc;
 

@@ -1,6 +1,8 @@
 //! A small glTF 2.0 writer: tests, benchmarks and the sample animations
 //! build scenes in code instead of shipping opaque binaries. It sits before
-//! the frame's data flow: what it writes, `import` reads.
+//! the frame's data flow: what it writes, `import` reads. It is a crate of
+//! its own, beside the renderer rather than in it: lmanim's tests, benches
+//! and example depend on it, the `lmanim` library and binary do not.
 //!
 //! [`GltfBuilder`] collects geometry, materials (with
 //! KHR_materials_transmission and KHR_materials_ior), KHR_lights_punctual
@@ -11,11 +13,14 @@
 //! usual test geometry.
 //!
 //! Animation is written from the scene model's own types too: skins
-//! ([`crate::scene::Skin`]), JOINTS_n/WEIGHTS_n and morph targets on a
+//! ([`lmanim::scene::Skin`]), JOINTS_n/WEIGHTS_n and morph targets on a
 //! [`Geometry`], default morph weights on meshes and nodes, and clips
-//! ([`crate::scene::AnimationClip`], every interpolation) whose channels
+//! ([`lmanim::scene::AnimationClip`], every interpolation) whose channels
 //! name nodes by index, or lights, cameras and materials, which are written
 //! as KHR_animation_pointer channels.
+//!
+//! [`city`] generates a city block of any size, and [`samples`] the scenes
+//! under `animations/`.
 
 mod animation;
 mod builder;
@@ -23,6 +28,7 @@ pub mod city;
 mod container;
 mod error;
 mod json;
+pub mod samples;
 pub mod shapes;
 
 pub use builder::GltfBuilder;
@@ -30,7 +36,7 @@ pub use error::AuthoringError;
 
 use glam::{Mat3, Quat, Vec2, Vec3};
 
-use crate::scene::{JointSet, Material, MorphTarget};
+use lmanim::scene::{JointSet, Material, MorphTarget};
 
 /// Triangle geometry in object space: one glTF primitive's attributes.
 /// Triangles wind counter-clockwise seen from their front.

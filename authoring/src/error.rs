@@ -1,7 +1,7 @@
 //! The one error type of the authoring boundary: what was wrong with the
 //! scene being built, or which file could not be written.
 
-use crate::output::OutputError;
+use lmanim::output::OutputError;
 
 /// Why a glTF file could not be built or written.
 #[derive(Debug, thiserror::Error)]

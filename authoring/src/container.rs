@@ -8,7 +8,7 @@ use std::path::Path;
 use base64::Engine;
 use serde_json::{json, Map, Value};
 
-use crate::output::{write_atomically, OutputError};
+use lmanim::output::{write_atomically, OutputError};
 
 use super::json::LIGHTS_PUNCTUAL;
 use super::{AuthoringError, GltfBuilder};
