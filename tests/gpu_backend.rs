@@ -2,8 +2,12 @@
 //! through shared edges and vertices, axis-parallel rays, coordinates near
 //! 1e5 m, a wall 1 cm thick, a rotated dynamic instance), formula (1) point
 //! by point at hard points (on edges and vertices, lights on surfaces and
-//! in their planes, every kind of light and lobe), frame by frame on the
-//! sample scenes and a textured model, the same bits twice, a silent
+//! in their planes, every kind of light and lobe), shading points field
+//! by field on every camera and Whitted ray of the sample scenes, a
+//! textured model and skinned and morphing meshes, frame by frame on the
+//! same (jittered samples and an orthographic camera included, and enough
+//! samples that the recursion's compaction spans hundreds of workgroups),
+//! the same bits twice, a silent
 //! headless run, work the device refuses as an error, and the one-line
 //! error where no adapter exists.
 //!
