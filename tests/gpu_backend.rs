@@ -573,18 +573,29 @@ fn skinned_and_morphing_animations_match_the_cpu() {
     assert_backends_agree(&anim_support::morph(dir.path()), "0..4", &args);
 }
 
-/// The courtyard seen through an orthographic camera.
-fn orthographic_courtyard(dir: &Path) -> std::path::PathBuf {
+/// The sample courtyard as `edit` changes it, written to `dir/name`.
+fn courtyard_variant(
+    dir: &Path,
+    name: &str,
+    edit: impl FnOnce(&mut serde_json::Value),
+) -> std::path::PathBuf {
     let mut doc: serde_json::Value =
         serde_json::from_slice(&std::fs::read(sample("courtyard.gltf")).expect("read"))
             .expect("JSON");
-    doc["cameras"][0] = serde_json::json!({
-        "type": "orthographic",
-        "orthographic": { "xmag": 8.0, "ymag": 4.5, "znear": 0.1, "zfar": 100.0 }
-    });
-    let path = dir.join("orthographic.gltf");
+    edit(&mut doc);
+    let path = dir.join(name);
     std::fs::write(&path, doc.to_string()).expect("write");
     path
+}
+
+/// The courtyard seen through an orthographic camera.
+fn orthographic_courtyard(dir: &Path) -> std::path::PathBuf {
+    courtyard_variant(dir, "orthographic.gltf", |doc| {
+        doc["cameras"][0] = serde_json::json!({
+            "type": "orthographic",
+            "orthographic": { "xmag": 8.0, "ymag": 4.5, "znear": 0.1, "zfar": 100.0 }
+        });
+    })
 }
 
 /// Camera rays made on the GPU are the CPU's: at 5 samples per pixel
@@ -612,33 +623,29 @@ fn textured_courtyard(dir: &Path) -> std::path::PathBuf {
         }
     });
     checker.save(dir.join("checker.png")).expect("write PNG");
-    let mut doc: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(sample("courtyard.gltf")).expect("read"))
-            .expect("JSON");
-    doc["images"] = serde_json::json!([{ "uri": "checker.png" }]);
-    doc["samplers"] = serde_json::json!([
-        { "magFilter": 9728, "minFilter": 9728, "wrapS": 10497, "wrapT": 10497 },
-        { "magFilter": 9729, "minFilter": 9729, "wrapS": 33648, "wrapT": 33648 },
-    ]);
-    doc["textures"] =
-        serde_json::json!([{ "source": 0, "sampler": 0 }, { "source": 0, "sampler": 1 }]);
-    let materials = doc["materials"].as_array_mut().expect("materials");
-    for (index, material) in materials.iter_mut().enumerate() {
-        match material["name"].as_str() {
-            Some("Stone" | "Plaster" | "Wood") => {
-                material["pbrMetallicRoughness"]["baseColorTexture"] =
-                    serde_json::json!({ "index": index % 2 });
+    courtyard_variant(dir, "textured.gltf", |doc| {
+        doc["images"] = serde_json::json!([{ "uri": "checker.png" }]);
+        doc["samplers"] = serde_json::json!([
+            { "magFilter": 9728, "minFilter": 9728, "wrapS": 10497, "wrapT": 10497 },
+            { "magFilter": 9729, "minFilter": 9729, "wrapS": 33648, "wrapT": 33648 },
+        ]);
+        doc["textures"] =
+            serde_json::json!([{ "source": 0, "sampler": 0 }, { "source": 0, "sampler": 1 }]);
+        let materials = doc["materials"].as_array_mut().expect("materials");
+        for (index, material) in materials.iter_mut().enumerate() {
+            match material["name"].as_str() {
+                Some("Stone" | "Plaster" | "Wood") => {
+                    material["pbrMetallicRoughness"]["baseColorTexture"] =
+                        serde_json::json!({ "index": index % 2 });
+                }
+                Some("BluePaint") => {
+                    material["emissiveTexture"] = serde_json::json!({ "index": 1 });
+                    material["emissiveFactor"] = serde_json::json!([0.5, 0.5, 0.5]);
+                }
+                _ => {}
             }
-            Some("BluePaint") => {
-                material["emissiveTexture"] = serde_json::json!({ "index": 1 });
-                material["emissiveFactor"] = serde_json::json!([0.5, 0.5, 0.5]);
-            }
-            _ => {}
         }
-    }
-    let path = dir.join("textured.gltf");
-    std::fs::write(&path, doc.to_string()).expect("write");
-    path
+    })
 }
 
 #[test]

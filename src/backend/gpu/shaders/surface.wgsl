@@ -91,6 +91,16 @@ fn deformed_vec3(offset: u32, index: u32) -> vec3<f32> {
     return vec3<f32>(deformed[base], deformed[base + 1u], deformed[base + 2u]);
 }
 
+// Vertex `index`'s position or normal: from the frame's deformed mesh at
+// `deformed_offset` where the object deforms (NONE where it does not),
+// else from the mesh's words at `mesh_offset`.
+fn vertex_vec3(deformed_offset: u32, mesh_offset: u32, index: u32) -> vec3<f32> {
+    if deformed_offset == NONE {
+        return word_vec3(mesh_offset, index);
+    }
+    return deformed_vec3(deformed_offset, index);
+}
+
 // `Affine3A::transform_point3`.
 fn to_render(object: ObjectRecord, p: vec3<f32>) -> vec3<f32> {
     let m = object.to_render;
@@ -175,18 +185,9 @@ fn surface_point(ray: PathRay, hit: HitRecord) -> SurfacePoint {
     let v = hit.v;
     let w = 1.0 - u - v;
 
-    var pa: vec3<f32>;
-    var pb: vec3<f32>;
-    var pc: vec3<f32>;
-    if object.deformed_positions == NONE {
-        pa = word_vec3(mesh.positions, a);
-        pb = word_vec3(mesh.positions, b);
-        pc = word_vec3(mesh.positions, c);
-    } else {
-        pa = deformed_vec3(object.deformed_positions, a);
-        pb = deformed_vec3(object.deformed_positions, b);
-        pc = deformed_vec3(object.deformed_positions, c);
-    }
+    let pa = vertex_vec3(object.deformed_positions, mesh.positions, a);
+    let pb = vertex_vec3(object.deformed_positions, mesh.positions, b);
+    let pc = vertex_vec3(object.deformed_positions, mesh.positions, c);
     let ra = to_render(object, pa);
     let rb = to_render(object, pb);
     let rc = to_render(object, pc);
@@ -215,18 +216,9 @@ fn surface_point(ray: PathRay, hit: HitRecord) -> SurfacePoint {
     }
     point.shading_normal = geometric_normal;
     if a < normal_count && b < normal_count && c < normal_count {
-        var na: vec3<f32>;
-        var nb: vec3<f32>;
-        var nc: vec3<f32>;
-        if object.deformed_positions == NONE {
-            na = word_vec3(mesh.normals, a);
-            nb = word_vec3(mesh.normals, b);
-            nc = word_vec3(mesh.normals, c);
-        } else {
-            na = deformed_vec3(object.deformed_normals, a);
-            nb = deformed_vec3(object.deformed_normals, b);
-            nc = deformed_vec3(object.deformed_normals, c);
-        }
+        let na = vertex_vec3(object.deformed_normals, mesh.normals, a);
+        let nb = vertex_vec3(object.deformed_normals, mesh.normals, b);
+        let nc = vertex_vec3(object.deformed_normals, mesh.normals, c);
         let m = object.normal_to_render;
         let n = normalize_or_zero3(map3(m[0].xyz, m[1].xyz, m[2].xyz, interpolate3(w, u, v, na, nb, nc)));
         if dot3(n, geometric_normal) > 0.0 {
