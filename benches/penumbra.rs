@@ -127,8 +127,12 @@ fn main() {
         );
         if let Some(dir) = std::env::var_os("LMANIM_BENCH_DUMP") {
             let name = format!("area-r{radius}.png");
-            lmanim::output::write_png_preview(&std::path::Path::new(&dir).join(name), &reference)
-                .expect("png");
+            lmanim::output::write_png_preview(
+                &std::path::Path::new(&dir).join(name),
+                &reference,
+                0.0,
+            )
+            .expect("png");
         }
         let lit = reference.pixels.iter().map(|p| p.x).fold(0.0, f32::max);
         // The penumbra region: pixels the reference shows partly lit.
@@ -178,6 +182,7 @@ fn main() {
                     lmanim::output::write_png_preview(
                         &std::path::Path::new(&dir).join(name),
                         &image,
+                        0.0,
                     )
                     .expect("png");
                 }

@@ -109,6 +109,10 @@ struct RenderArgs {
     /// Also write a tone-mapped sRGB PNG preview beside each frame.
     #[arg(long)]
     png: bool,
+    /// Exposure of the PNG previews in stops: +1 doubles the radiance
+    /// before tone mapping (the EXR frames are not scaled) [default: 0].
+    #[arg(long, value_name = "EV", allow_negative_numbers = true)]
+    exposure: Option<f32>,
     /// Write 32-bit float EXR channels instead of half floats.
     #[arg(long)]
     exr_float: bool,
@@ -319,6 +323,7 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     settings.clip = flags.clip.clone().or(settings.clip);
     settings.out = flags.out.clone().or(settings.out);
     settings.png |= flags.png;
+    settings.exposure = flags.exposure.unwrap_or(settings.exposure);
     if flags.no_cache {
         settings.cache_dir = None;
     } else if let Some(dir) = &flags.cache {

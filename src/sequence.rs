@@ -315,7 +315,8 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
         let path = job.pattern.path_for(frame);
         output::write_exr(&path, &image, settings.exr_precision)?;
         if settings.png {
-            output::write_png_preview(&job.pattern.png_path_for(frame), &image)?;
+            let path = job.pattern.png_path_for(frame);
+            output::write_png_preview(&path, &image, settings.exposure)?;
         }
         stats.add_stage_time("output", write_started.elapsed().as_secs_f64());
         stats.seconds = frame_started.elapsed().as_secs_f64();

@@ -18,6 +18,9 @@ pub const MAX_DIMENSION: u32 = 32768;
 
 /// The deepest Whitted recursion accepted; deeper only costs time.
 pub const MAX_DEPTH: u32 = 64;
+/// Largest exposure, in stops either way: 2^±64 takes any radiance a float
+/// holds to black or to white; more is a typo.
+pub const MAX_EXPOSURE: f32 = 64.0;
 
 /// Everything that decides how frames are rendered and written.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -43,6 +46,9 @@ pub struct Settings {
     pub exr_precision: ExrPrecision,
     /// Also write a tone-mapped PNG preview of every frame.
     pub png: bool,
+    /// Exposure of the PNG previews, in stops (EV): +1 doubles the linear
+    /// radiance before tone mapping. The EXR frames are never scaled.
+    pub exposure: f32,
     /// Worker threads; None uses every core.
     pub threads: Option<usize>,
     /// Output frame pattern (`frame.####.exr`); None derives one from the
@@ -70,6 +76,7 @@ impl Default for Settings {
             clip: None,
             exr_precision: ExrPrecision::Half,
             png: false,
+            exposure: 0.0,
             threads: None,
             out: None,
             cache_dir: Some("cache".into()),
@@ -241,6 +248,12 @@ impl Settings {
             return Err(format!(
                 "max_depth is {}; it must be at most {MAX_DEPTH}",
                 self.max_depth
+            ));
+        }
+        if !self.exposure.is_finite() || self.exposure.abs() > MAX_EXPOSURE {
+            return Err(format!(
+                "exposure is {} EV; it must be within ±{MAX_EXPOSURE}",
+                self.exposure
             ));
         }
         if self.backend == BackendKind::Gpu && self.method.uses_light_mesh() {

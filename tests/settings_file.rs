@@ -149,3 +149,18 @@ fn impossible_values_are_rejected() {
     edge.lamps.default_radius = Some(0.0);
     edge.validate().unwrap();
 }
+
+#[test]
+fn exposure_is_read_and_impossible_exposures_are_rejected() {
+    let settings = parse("(png: true, exposure: -1.5)").unwrap();
+    assert_eq!(settings.exposure, -1.5);
+    settings.validate().unwrap();
+    for exposure in [f32::NAN, f32::INFINITY, 65.0, -65.0] {
+        let settings = Settings {
+            exposure,
+            ..Settings::default()
+        };
+        let message = settings.validate().unwrap_err().to_string();
+        assert!(message.contains("exposure"), "{exposure}: {message}");
+    }
+}

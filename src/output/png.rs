@@ -1,8 +1,8 @@
 //! PNG previews: a quick look at a frame, not a deliverable. Linear radiance
-//! is tone-mapped with Reinhard's operator on luminance, `L' = L / (1 + L)`
-//! at exposure 1 (hue is kept, highlights roll off instead of clipping),
-//! then sRGB-encoded into 8-bit RGBA. Alpha is stored as is, clamped to
-//! [0, 1].
+//! is scaled by the exposure (2^EV), tone-mapped with Reinhard's operator
+//! on luminance, `L' = L / (1 + L)` (hue is kept, highlights roll off
+//! instead of clipping), then sRGB-encoded into 8-bit RGBA. Alpha is
+//! stored as is, clamped to [0, 1].
 
 use std::path::Path;
 
@@ -14,12 +14,16 @@ use super::{write_atomically, Image, OutputError};
 /// Rec.709 luminance weights, matching the linear Rec.709 colour of frames.
 const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
 
-/// Writes a tone-mapped 8-bit sRGB preview of `image` to `path`, atomically.
-pub fn write_png_preview(path: &Path, image: &Image) -> Result<(), OutputError> {
+/// Writes a tone-mapped 8-bit sRGB preview of `image` at `exposure` stops
+/// to `path`, atomically.
+pub fn write_png_preview(path: &Path, image: &Image, exposure: f32) -> Result<(), OutputError> {
     if !image.has_consistent_size() {
         return Err(OutputError::image_size(path, image));
     }
-    let bytes: Vec<u8> = image.pixels.iter().flat_map(|&p| tone_map(p)).collect();
+    let scale = exposure.exp2();
+    let bytes: Vec<u8> = (image.pixels.iter())
+        .flat_map(|&p| tone_map((p.truncate() * scale).extend(p.w)))
+        .collect();
     write_atomically(path, |writer| {
         image::codecs::png::PngEncoder::new(writer)
             .write_image(
@@ -69,6 +73,28 @@ mod tests {
     use super::*;
 
     #[test]
+    fn one_stop_up_doubles_the_linear_value_before_tone_mapping() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let pixel = Vec4::new(0.3, 0.2, 0.05, 1.0);
+        let (brighter, doubled) = (dir.path().join("up.png"), dir.path().join("twice.png"));
+        let image = |value: Vec4| Image::filled(2, 1, value);
+        write_png_preview(&brighter, &image(pixel), 1.0).expect("write");
+        write_png_preview(&doubled, &image((pixel.truncate() * 2.0).extend(1.0)), 0.0)
+            .expect("write");
+        let read = |path: &Path| image::open(path).expect("read").to_rgba8().into_raw();
+        assert_eq!(read(&brighter), read(&doubled));
+        assert_eq!(
+            read(&brighter)[..4],
+            tone_map(Vec4::new(0.6, 0.4, 0.1, 1.0))
+        );
+        assert_ne!(
+            read(&brighter)[..4],
+            tone_map(pixel),
+            "the exposure changed nothing"
+        );
+    }
+
+    #[test]
     fn tone_curve_keeps_black_and_white_points_sane() {
         assert_eq!(tone_map(Vec4::new(0.0, 0.0, 0.0, 1.0)), [0, 0, 0, 255]);
         // Luminance 1 maps to 0.5 linear, sRGB 0.735 → 188.
@@ -103,7 +129,7 @@ mod tests {
                 .map(|i| Vec4::new(i as f32, 0.5, 0.0, 1.0))
                 .collect(),
         };
-        write_png_preview(&path, &image).unwrap();
+        write_png_preview(&path, &image, 0.0).unwrap();
         let decoded = image::open(&path).unwrap().to_rgba8();
         assert_eq!(decoded.dimensions(), (5, 3));
         // Top row first: pixel (1, 0) is the second value written.
