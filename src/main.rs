@@ -113,6 +113,16 @@ struct RenderArgs {
     /// before tone mapping (the EXR frames are not scaled) [default: 0].
     #[arg(long, value_name = "EV", allow_negative_numbers = true)]
     exposure: Option<f32>,
+    /// Write a contact sheet of the run's frames, labelled with their
+    /// numbers, to this PNG at the end of the run.
+    #[arg(long, value_name = "FILE.png")]
+    contact_sheet: Option<String>,
+    /// Thumbnails per row of the contact sheet [default: 6].
+    #[arg(long, value_name = "N")]
+    sheet_columns: Option<u32>,
+    /// Put every K-th frame of the run on the contact sheet [default: 1].
+    #[arg(long, value_name = "K")]
+    sheet_every: Option<u32>,
     /// Write 32-bit float EXR channels instead of half floats.
     #[arg(long)]
     exr_float: bool,
@@ -324,6 +334,9 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     settings.out = flags.out.clone().or(settings.out);
     settings.png |= flags.png;
     settings.exposure = flags.exposure.unwrap_or(settings.exposure);
+    settings.contact_sheet = flags.contact_sheet.clone().or(settings.contact_sheet);
+    settings.sheet_columns = flags.sheet_columns.unwrap_or(settings.sheet_columns);
+    settings.sheet_every = flags.sheet_every.unwrap_or(settings.sheet_every);
     if flags.no_cache {
         settings.cache_dir = None;
     } else if let Some(dir) = &flags.cache {

@@ -15,7 +15,7 @@ use crate::backend::{Backend, BackendError, RenderError};
 use crate::import::{self, ImportError};
 use crate::lightmesh::persistent::PersistentLightMesh;
 use crate::lightmesh::{LightMesh, LightMeshError};
-use crate::output::{self, FramePattern, OutputError};
+use crate::output::{self, ContactSheet, FramePattern, OutputError};
 use crate::render::frame::{CameraChoice, FrameScene, PlaceError, SceneBounds};
 use crate::render::FrameJob;
 use crate::scene::pose::Pose;
@@ -302,6 +302,12 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
         ..RunStats::default()
     };
     let timeline = Timeline { fps: settings.fps };
+    let mut sheet = (settings.contact_sheet.as_ref()).map(|path| {
+        (
+            path,
+            ContactSheet::new(settings.sheet_columns, settings.sheet_every),
+        )
+    });
     for (index, &frame) in job.frames.frames().iter().enumerate() {
         let frame_started = Instant::now();
         let mut stats = FrameStats {
@@ -317,6 +323,9 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
         if settings.png {
             let path = job.pattern.png_path_for(frame);
             output::write_png_preview(&path, &image, settings.exposure)?;
+        }
+        if let Some((_, sheet)) = &mut sheet {
+            sheet.add(index, frame, &image);
         }
         stats.add_stage_time("output", write_started.elapsed().as_secs_f64());
         stats.seconds = frame_started.elapsed().as_secs_f64();
@@ -336,6 +345,9 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
     // frames.
     if let Err(error) = sequence.save_cache() {
         log::warn!("{error}; the light-mesh cache was not saved");
+    }
+    if let Some((path, sheet)) = &sheet {
+        sheet.write(Path::new(path), settings.exposure)?;
     }
     run.total_seconds = started.elapsed().as_secs_f64();
     Ok(run)

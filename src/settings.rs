@@ -18,6 +18,10 @@ pub const MAX_DIMENSION: u32 = 32768;
 
 /// The deepest Whitted recursion accepted; deeper only costs time.
 pub const MAX_DEPTH: u32 = 64;
+/// Most thumbnails in a contact sheet's row: the sheet is one frame wide,
+/// so more makes thumbnails of a few pixels.
+pub const MAX_SHEET_COLUMNS: u32 = 64;
+
 /// Largest exposure, in stops either way: 2^±64 takes any radiance a float
 /// holds to black or to white; more is a typo.
 pub const MAX_EXPOSURE: f32 = 64.0;
@@ -46,9 +50,16 @@ pub struct Settings {
     pub exr_precision: ExrPrecision,
     /// Also write a tone-mapped PNG preview of every frame.
     pub png: bool,
-    /// Exposure of the PNG previews, in stops (EV): +1 doubles the linear
-    /// radiance before tone mapping. The EXR frames are never scaled.
+    /// Exposure of the PNG previews and the contact sheet, in stops (EV):
+    /// +1 doubles the linear radiance before tone mapping. The EXR frames
+    /// are never scaled.
     pub exposure: f32,
+    /// A contact sheet of the run's frames to write at its end (PNG).
+    pub contact_sheet: Option<String>,
+    /// Thumbnails per row of the contact sheet.
+    pub sheet_columns: u32,
+    /// The sheet shows every this many-th frame of the run.
+    pub sheet_every: u32,
     /// Worker threads; None uses every core.
     pub threads: Option<usize>,
     /// Output frame pattern (`frame.####.exr`); None derives one from the
@@ -77,6 +88,9 @@ impl Default for Settings {
             exr_precision: ExrPrecision::Half,
             png: false,
             exposure: 0.0,
+            contact_sheet: None,
+            sheet_columns: 6,
+            sheet_every: 1,
             threads: None,
             out: None,
             cache_dir: Some("cache".into()),
@@ -255,6 +269,15 @@ impl Settings {
                 "exposure is {} EV; it must be within ±{MAX_EXPOSURE}",
                 self.exposure
             ));
+        }
+        if self.sheet_columns == 0 || self.sheet_columns > MAX_SHEET_COLUMNS {
+            return Err(format!(
+                "sheet_columns is {}; it must be 1 to {MAX_SHEET_COLUMNS}",
+                self.sheet_columns
+            ));
+        }
+        if self.sheet_every == 0 {
+            return Err("sheet_every is 0; it must be at least 1".into());
         }
         if self.backend == BackendKind::Gpu && self.method.uses_light_mesh() {
             return Err(format!(

@@ -260,3 +260,47 @@ fn a_scene_without_a_camera_gets_a_framing_camera() {
     assert_eq!(centre.w, 1.0);
     assert!(centre.x > 0.0);
 }
+
+/// `--contact-sheet` writes one labelled sheet of the run's frames at its
+/// end, in the grid `--sheet-columns` and `--sheet-every` ask for; an
+/// impossible grid is bad usage.
+#[test]
+fn a_contact_sheet_shows_the_runs_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let pattern = dir.path().join("frame.####.exr");
+    let sheet = dir.path().join("sheet.png");
+    let output = lmanim(&[
+        &courtyard(),
+        "--frames",
+        "0..5",
+        "--width",
+        "120",
+        "--height",
+        "60",
+        "--method",
+        "whitted",
+        "--out",
+        pattern.to_str().unwrap(),
+        "--contact-sheet",
+        sheet.to_str().unwrap(),
+        "--sheet-columns",
+        "2",
+        "--sheet-every",
+        "2",
+        "--exposure",
+        "1",
+        "--quiet",
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    // Frames 0, 2 and 4: two rows of two cells of 60×30.
+    let image = image::open(&sheet).expect("the sheet").to_rgba8();
+    assert_eq!(image.dimensions(), (120, 60));
+    let lit = |x: u32, y: u32| image.get_pixel(x, y).0[..3].iter().any(|&c| c > 0);
+    assert!(lit(30, 45), "the third frame's cell holds its picture");
+    assert_eq!(image.get_pixel(90, 45).0, [0, 0, 0, 0], "no fourth frame");
+
+    for (flag, value) in [("--sheet-columns", "0"), ("--sheet-every", "0")] {
+        let output = lmanim(&[&courtyard(), "--contact-sheet", "x.png", flag, value]);
+        assert_bad_usage(&output, &flag[2..].replace('-', "_"));
+    }
+}

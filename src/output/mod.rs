@@ -8,13 +8,15 @@ mod atomic;
 mod contact_sheet;
 mod error;
 mod exr;
+mod label;
 mod pattern;
 mod png;
 
 pub use atomic::write_atomically;
-pub use contact_sheet::contact_sheet;
+pub use contact_sheet::ContactSheet;
 pub use error::OutputError;
 pub use exr::{read_exr, write_exr};
+pub use label::FONT;
 pub use pattern::FramePattern;
 pub use png::{tone_map, write_png_preview};
 

@@ -20,18 +20,28 @@ pub fn write_png_preview(path: &Path, image: &Image, exposure: f32) -> Result<()
     if !image.has_consistent_size() {
         return Err(OutputError::image_size(path, image));
     }
+    write_rgba8(
+        path,
+        image.width,
+        image.height,
+        &preview_bytes(image, exposure),
+    )
+}
+
+/// `image` scaled by 2^`exposure` and tone-mapped into 8-bit sRGB RGBA.
+pub fn preview_bytes(image: &Image, exposure: f32) -> Vec<u8> {
     let scale = exposure.exp2();
-    let bytes: Vec<u8> = (image.pixels.iter())
+    (image.pixels.iter())
         .flat_map(|&p| tone_map((p.truncate() * scale).extend(p.w)))
-        .collect();
+        .collect()
+}
+
+/// Writes the RGBA8 `bytes` of a `width` × `height` image to `path` as a
+/// PNG, atomically.
+pub fn write_rgba8(path: &Path, width: u32, height: u32, bytes: &[u8]) -> Result<(), OutputError> {
     write_atomically(path, |writer| {
         image::codecs::png::PngEncoder::new(writer)
-            .write_image(
-                &bytes,
-                image.width,
-                image.height,
-                image::ExtendedColorType::Rgba8,
-            )
+            .write_image(bytes, width, height, image::ExtendedColorType::Rgba8)
             .map_err(|error| OutputError::Encode {
                 path: path.to_path_buf(),
                 fault: error.to_string(),
