@@ -19,7 +19,7 @@ use lmanim::import;
 use lmanim::output::{self, ExrPrecision, FramePattern};
 use lmanim::schedule::{FrameSet, Timeline};
 use lmanim::sequence::{self, Job};
-use lmanim::settings::{BackendKind, Method, Settings};
+use lmanim::settings::{BackendKind, LightMeshSettings, Method, Settings};
 use lmanim::stats::RunStats;
 
 /// Render a glTF scene's animation to an EXR image sequence, with soft
@@ -106,6 +106,12 @@ struct RenderArgs {
     /// Worker threads (default: one per core).
     #[arg(long)]
     threads: Option<usize>,
+    /// Light-mesh lattice step in metres [default: from the lamp radii].
+    #[arg(long = "h", value_name = "METRES", allow_negative_numbers = true)]
+    h: Option<f32>,
+    /// Light-mesh interpolation radius in lattice steps (the paper's kI).
+    #[arg(long, value_name = "K", allow_negative_numbers = true)]
+    ki: Option<f32>,
     /// Also write a tone-mapped sRGB PNG preview beside each frame.
     #[arg(long)]
     png: bool,
@@ -319,6 +325,18 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     settings.clip = flags.clip.clone().or(settings.clip);
     settings.out = flags.out.clone().or(settings.out);
     settings.png |= flags.png;
+    if let Some(h) = flags.h {
+        let fault = LightMeshSettings::h_fault(h);
+        let fault = fault.map(|fault| anyhow::anyhow!("--h {h}: {fault}"));
+        fault.map_or(Ok(()), |fault| Err(Failure::bad_input(fault)))?;
+        settings.lightmesh.h = Some(h);
+    }
+    if let Some(ki) = flags.ki {
+        let fault = LightMeshSettings::ki_fault(ki);
+        let fault = fault.map(|fault| anyhow::anyhow!("--ki {ki}: {fault}"));
+        fault.map_or(Ok(()), |fault| Err(Failure::bad_input(fault)))?;
+        settings.lightmesh.ki = ki;
+    }
     if flags.no_cache {
         settings.cache_dir = None;
     } else if let Some(dir) = &flags.cache {
