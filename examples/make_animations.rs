@@ -15,6 +15,10 @@
 //! 8 cars lapping the streets, 12 skinned trees swaying along the main
 //! street and a 10 s camera fly-through ("flythrough"). Its settings are
 //! in the hand-written `city.ron`.
+//!
+//! `study-box.gltf`, `study-leaves.gltf`, `study-street.gltf` and
+//! `study-wall.gltf` are the stills of `lmanim study` (STUDY.md), from
+//! [`lmanim::authoring::study`].
 
 use std::f32::consts::PI;
 use std::path::Path;
@@ -22,6 +26,7 @@ use std::path::Path;
 use anyhow::Context;
 use glam::{Quat, Vec2, Vec3, Vec4};
 use lmanim::authoring::city::{city_block, CityParams};
+use lmanim::authoring::study::StudyScene;
 use lmanim::authoring::{
     look_at_rotation, matte, shapes, GltfBuilder, MeshId, NodeDesc, Primitive,
 };
@@ -40,6 +45,14 @@ fn main() -> anyhow::Result<()> {
         .write_gltf(&path)
         .with_context(|| format!("writing {}", path.display()))?;
     println!("wrote {}", path.display());
+    for scene in StudyScene::ALL {
+        let path = out.join(format!("{}.gltf", scene.file_stem()));
+        scene
+            .build()?
+            .write_gltf(&path)
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
     Ok(())
 }
 

@@ -24,6 +24,7 @@ mod container;
 mod error;
 mod json;
 pub mod shapes;
+pub mod study;
 
 pub use builder::GltfBuilder;
 pub use error::AuthoringError;
