@@ -225,6 +225,12 @@ fn shade_by_method(
             mesh.fill(&demand, lights, job.world, lightmesh)?;
             stats.add_stage_time("fill", start.elapsed().as_secs_f64());
 
+            if !method.tests_point_to_node() {
+                let start = Instant::now();
+                lightmesh.nodes_probed += mesh.settle_enclosure(&demand, job.world);
+                stats.add_stage_time("enclosure", start.elapsed().as_secs_f64());
+            }
+
             let mesh = &*mesh;
             let point_to_node_tests = method.tests_point_to_node();
             let scratch = || Scratch::new(mesh);
