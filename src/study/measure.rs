@@ -3,10 +3,14 @@
 //!
 //! Per pixel, with Y the Rec.709 luminance, R the reference, U the
 //! unshadowed frame (every light visible, lmanim's own) and I the frame
-//! measured, the error is `e = (Y(I) − Y(R)) / Y(U)`: the share of the
-//! pixel's available direct light that the frame gets wrong. That makes a
-//! dark corner and a lit floor count alike, and a shadow wrong by a tenth
-//! of its lamp the same everywhere.
+//! measured, the error is `e = (Y(I) − Y(R)) / max(Y(U), Y(R))`: the share
+//! of the pixel's available direct light that the frame gets wrong. That
+//! makes a dark corner and a lit floor count alike, and a shadow wrong by
+//! a tenth of its lamp the same everywhere. The reference is in the
+//! denominator too because a spherical lamp can light a surface that its
+//! point light only grazes (a lamp post's side beside its lamp): there the
+//! point light's U is near 0, and the error is a share of what the lamp
+//! gives instead of a multiple of nothing.
 //!
 //! Pixels taken into account ("lit"): U is at least [`LIT_FLOOR`] of the
 //! brightest unshadowed pixel, the reference's mask (if any) is 0, and
@@ -61,8 +65,9 @@ pub struct SizeMismatch {
 #[derive(Clone, Debug)]
 pub struct Reference {
     pub image: Image,
-    /// Unshadowed luminance at each pixel's centre.
-    unshadowed: Vec<f64>,
+    /// Per pixel, the light the error is a share of: the larger of the
+    /// unshadowed luminance at its centre and the reference's.
+    available: Vec<f64>,
     /// Pixels taken into account.
     lit: Vec<bool>,
     penumbra: Vec<bool>,
@@ -129,9 +134,12 @@ impl Reference {
                 census.penumbra_pixels += 1;
             }
         }
+        let available = (unshadowed.iter().zip(&image.pixels))
+            .map(|(&u, &r)| u.max(luminance(r)))
+            .collect();
         Ok(Reference {
             image,
-            unshadowed,
+            available,
             lit,
             penumbra,
             census,
@@ -153,7 +161,7 @@ impl Reference {
             if !self.lit[i] {
                 continue;
             }
-            let error = (luminance(measured) - luminance(reference)) / self.unshadowed[i];
+            let error = (luminance(measured) - luminance(reference)) / self.available[i];
             lit.add(error);
             if self.penumbra[i] {
                 penumbra.add(error);
@@ -261,7 +269,9 @@ mod tests {
     fn an_offset_of_a_share_of_the_unshadowed_light_is_that_share() {
         let (reference, unshadowed) = scene();
         let measure = Reference::new(reference.clone(), &unshadowed, &unshadowed, None).unwrap();
-        for offset in [0.005f32, 0.03, -0.2] {
+        // Darker frames: the reference never exceeds U here, so U is the
+        // light the error is a share of.
+        for offset in [-0.005f32, -0.03, -0.2] {
             let mut frame = reference.clone();
             for (p, u) in frame.pixels.iter_mut().zip(&unshadowed.pixels) {
                 *p += *u * offset;
@@ -274,6 +284,22 @@ mod tests {
             let within = if offset.abs() <= 0.01 { 1.0 } else { 0.0 };
             assert_eq!(errors.within_1pct, within, "{offset}");
         }
+    }
+
+    #[test]
+    fn where_the_reference_outshines_the_unshadowed_light_it_is_the_scale() {
+        let (reference, unshadowed) = scene();
+        // A pixel the lamp lights at 4 where the point light gives 1 (a
+        // surface the point light grazes): a frame of 0 there is 100% off.
+        let mut bright = reference.clone();
+        bright.pixels[9] = Vec4::splat(4.0);
+        let mut grazed = unshadowed.clone();
+        grazed.pixels[9] = Vec4::splat(1.0);
+        let measure = Reference::new(bright.clone(), &grazed, &grazed, None).unwrap();
+        let mut frame = bright;
+        frame.pixels[9] = Vec4::ZERO;
+        let errors = measure.errors(&frame).unwrap();
+        assert!((errors.max_error - 1.0).abs() < 1e-9, "{errors:?}");
     }
 
     #[test]

@@ -1,0 +1,146 @@
+//! `lmanim study` end to end: a tiny study of the box scene writes its four
+//! outputs with the runs the sweep promises, and bad input stops it with
+//! one line and exit code 2.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use glam::Vec4;
+use lmanim::authoring::study::StudyScene;
+use lmanim::output::{write_exr, ExrPrecision, Image};
+
+fn lmanim(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lmanim"))
+        .args(args)
+        .current_dir(std::env::temp_dir())
+        .output()
+        .expect("the binary runs")
+}
+
+fn box_scene(dir: &Path) -> String {
+    let path = dir.join("box.glb");
+    StudyScene::Box.build().unwrap().write_glb(&path).unwrap();
+    path.display().to_string()
+}
+
+fn text(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+const TINY: [&str; 6] = ["--width", "48", "--height", "27", "--reference-spp", "16"];
+
+#[test]
+fn a_tiny_study_writes_all_four_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = box_scene(dir.path());
+    let out: PathBuf = dir.path().join("study");
+    let mut args = vec!["study", scene.as_str()];
+    args.extend(TINY);
+    args.extend([
+        "--methods",
+        "whitted,lmm1,area",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let output = lmanim(&args);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("[21/21] area 64 spp"),
+        "progress on stderr: {stderr}"
+    );
+
+    let json: serde_json::Value = serde_json::from_str(&text(&out.join("study.json"))).unwrap();
+    let runs = json["runs"].as_array().unwrap();
+    // whitted, lmm1 at the default lattice and 15 swept ones, area at 4 spp.
+    assert_eq!(runs.len(), 1 + 16 + 4);
+    assert_eq!(json["reference"]["spp"], 16);
+    assert!(json["reference"]["penumbra_pixels"].as_u64().unwrap() > 0);
+    for run in runs {
+        assert!(run["seconds"].as_f64().unwrap() > 0.0, "{run}");
+        let rmse = run["rmse"].as_f64().unwrap();
+        assert!((0.0..1.0).contains(&rmse), "{run}");
+    }
+    assert!(runs[0]["h"].is_null() && runs[0]["ki"].is_null());
+    assert_eq!(runs[1]["default_lattice"], true);
+    assert!(
+        runs[1]["h"].as_f64().unwrap() > 0.0,
+        "the default h is reported"
+    );
+    // Area at the reference's own samples renders the reference's pixels.
+    let same = runs
+        .iter()
+        .find(|run| run["method"] == "area" && run["spp"] == 16)
+        .unwrap();
+    assert_eq!(same["rmse"], 0.0);
+    assert_eq!(same["within_1pct"], 1.0);
+    // Whitted's hard edge is wrong in the penumbra.
+    assert!(runs[0]["penumbra_rmse"].as_f64().unwrap() > 0.05);
+    assert!(runs.iter().any(|run| run["pareto"] == true));
+
+    let csv = text(&out.join("study.csv"));
+    assert_eq!(csv.lines().count(), 1 + runs.len());
+    for picture in ["study.png", "crops.png"] {
+        let bytes = std::fs::read(out.join(picture)).unwrap();
+        assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n"), "{picture}");
+        assert!(bytes.len() > 2000, "{picture} has something drawn");
+    }
+    assert!(out.join("reference.exr").is_file());
+}
+
+/// Asserts exit code 2 and one line on stderr holding `needle`.
+fn assert_bad_input(output: &Output, needle: &str) {
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    let lines: Vec<&str> = stderr
+        .lines()
+        .filter(|line| !line.trim().is_empty())
+        .collect();
+    assert_eq!(lines.len(), 1, "one line: {stderr}");
+    assert!(lines[0].contains(needle), "'{needle}' in {stderr}");
+}
+
+#[test]
+fn bad_input_stops_the_study_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = box_scene(dir.path());
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    let study = |extra: &[&str]| {
+        let mut args = vec![
+            "study",
+            scene.as_str(),
+            "--width",
+            "48",
+            "--height",
+            "27",
+            "--quiet",
+        ];
+        args.extend(extra);
+        args.extend(["--out", out]);
+        lmanim(&args)
+    };
+    let missing = dir.path().join("missing.exr");
+    assert_bad_input(
+        &study(&["--reference", missing.to_str().unwrap()]),
+        "missing.exr",
+    );
+    let junk = dir.path().join("junk.exr");
+    std::fs::write(&junk, b"not an exr").unwrap();
+    assert_bad_input(&study(&["--reference", junk.to_str().unwrap()]), "junk.exr");
+    let small = dir.path().join("small.exr");
+    write_exr(&small, &Image::filled(4, 4, Vec4::ONE), ExrPrecision::Float).unwrap();
+    let output = study(&["--reference", small.to_str().unwrap()]);
+    assert_bad_input(&output, "small.exr");
+    assert!(String::from_utf8_lossy(&output.stderr).contains("4x4"));
+    assert_bad_input(&study(&["--reference-spp", "0"]), "--reference-spp");
+    assert_bad_input(
+        &lmanim(&["study", &scene, "--width", "0", "--out", out]),
+        "width",
+    );
+    assert_bad_input(
+        &lmanim(&["study", "/no/such/scene.gltf", "--out", out]),
+        "/no/such/scene.gltf",
+    );
+    assert!(!Path::new(out).join("study.json").exists());
+}
