@@ -70,7 +70,12 @@ pub const PROBES: [Vec3; 14] = {
 /// `reach` metres around it (see the module doc).
 pub fn is_enclosed(world: &World, at: Vec3, reach: f32) -> bool {
     let (mut backs, mut fronts) = (0, 0);
-    for direction in PROBES {
+    for (done, direction) in PROBES.into_iter().enumerate() {
+        // Stop once the probes left cannot change the verdict.
+        let left = PROBES.len() - done;
+        if backs > fronts + left || fronts >= backs + left {
+            break;
+        }
         if let Some(hit) = world.closest_static_hit(&Ray::new(at, direction, reach)) {
             if hit.geometric_normal.dot(direction) > 0.0 {
                 backs += 1;
