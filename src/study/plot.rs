@@ -60,7 +60,7 @@ pub fn error_against_time(
         let root = BitMapBackend::with_buffer(&mut rgb, (width, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| fault(&e))?;
         let panels = root.split_evenly((1, 2));
-        let measures: [(&str, fn(&RunResult) -> Option<f64>); 2] = [
+        let measures: [(&str, Measure); 2] = [
             ("relative RMSE, lit pixels", |run| Some(run.errors.rmse)),
             ("relative RMSE, penumbra pixels", |run| {
                 run.errors.penumbra_rmse
@@ -78,6 +78,9 @@ pub fn error_against_time(
     }
     Ok(write_srgb_png(path, width, height, &rgb)?)
 }
+
+/// What a panel plots of a run (None: the run has no such error).
+type Measure = fn(&RunResult) -> Option<f64>;
 
 type Panel<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
 type DrawResult =
