@@ -1,13 +1,22 @@
 //! `lmanim study` end to end: a tiny study of the box scene writes its four
 //! outputs with the runs the sweep promises, and bad input stops it with
-//! one line and exit code 2.
+//! one line and exit code 2; and the study's penumbra is where geometry
+//! puts it.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use glam::Vec4;
+mod common;
+
+use common::*;
+use glam::{Vec3, Vec4};
 use lmanim::authoring::study::StudyScene;
+use lmanim::backend::{Backend, CpuBackend};
 use lmanim::output::{write_exr, ExrPrecision, Image};
+use lmanim::sequence::Sequence;
+use lmanim::settings::{BackendKind, Method, Settings};
+use lmanim::stats::FrameStats;
+use lmanim::study::measure::Reference;
 
 fn lmanim(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_lmanim"))
@@ -143,4 +152,62 @@ fn bad_input_stops_the_study_with_one_line() {
         "/no/such/scene.gltf",
     );
     assert!(!Path::new(out).join("study.json").exists());
+}
+
+/// A square plate (half-size 0.25 m) 1 m above the floor, under a lamp of
+/// radius 0.2 m 1 m above the plate. Along the floor's central strip,
+/// similar triangles put the umbra within |x| = 0.3 m and full light
+/// beyond 0.7 m (a floor point at x sees the lamp's x' where
+/// (x + x') / 2 ≥ 0.25): the measure's penumbra pixels must lie between,
+/// and fill it two pixels in from each end, where at least 7% and at most
+/// 93% of the lamp shows.
+#[test]
+fn penumbra_pixels_lie_where_similar_triangles_put_the_penumbra() {
+    let mut scene = empty_scene();
+    let grey = add_material(&mut scene, lambert(Vec3::splat(0.5)));
+    add_quads(
+        &mut scene,
+        &[floor_quad(0.0, 3.0), floor_quad(1.0, 0.25)],
+        1,
+        grey,
+    );
+    add_lamp(&mut scene, 20.0, Vec3::new(0.0, 2.0, 0.0), 0.2);
+    add_top_camera(&mut scene, 0.5, 1.0);
+    let (width, height) = (80, 80);
+    let frame = settings(width, height);
+    let mut sequence = Sequence::new(scene, "plate".into()).unwrap();
+    let placed = sequence.place(&frame).unwrap();
+    let mut backend = Backend::new(BackendKind::Cpu, None).unwrap();
+    let area = Settings {
+        method: Method::Area,
+        spp: 1024,
+        ..frame.clone()
+    };
+    let lamp = sequence
+        .render(&mut backend, &placed, &area, &mut FrameStats::default())
+        .unwrap();
+    let cpu = CpuBackend::new(None).unwrap();
+    let unshadowed = sequence.render_unshadowed(&cpu, &placed, &frame, &mut FrameStats::default());
+    let measure = Reference::new(lamp, &unshadowed, &unshadowed, None).unwrap();
+
+    let step = 2.0 / width as f32;
+    let mut inside = 0;
+    for py in 0..height {
+        for px in 0..width {
+            let (x, z) = top_camera_ground(px, py, width, height, 1.0);
+            if z.abs() > 0.2 {
+                continue;
+            }
+            let penumbra = measure.is_penumbra_pixel((py * width + px) as usize);
+            let r = x.abs();
+            if (0.3 + 2.0 * step..0.7 - 2.0 * step).contains(&r) {
+                assert!(penumbra, "x = {x}, z = {z} is in the penumbra");
+                inside += 1;
+            }
+            if r < 0.3 - step || r > 0.7 + step {
+                assert!(!penumbra, "x = {x}, z = {z} is umbra or fully lit");
+            }
+        }
+    }
+    assert!(inside > 100, "{inside} pixels checked inside the penumbra");
 }

@@ -139,8 +139,8 @@ pub fn run(
             file: scene_file.clone(),
         })?;
 
-    let (reference, mut reference_report) = bench.reference(options, &settings, &mut progress)?;
-    reference_report.lamp_radius = lamp_radius;
+    let (reference, mut reference_report) =
+        bench.reference(options, &settings, lamp_radius, &mut progress)?;
     let reference_path = options.out.join("reference.exr");
     output::write_exr(&reference_path, &reference.image, ExrPrecision::Float)?;
 
@@ -277,6 +277,7 @@ impl Bench {
         &mut self,
         options: &StudyOptions,
         settings: &Settings,
+        lamp_radius: f32,
         progress: &mut impl FnMut(&str),
     ) -> Result<(Reference, ReferenceReport), StudyError> {
         let mut report = ReferenceReport {
@@ -288,7 +289,7 @@ impl Bench {
             frame: options.frame,
             width: settings.width,
             height: settings.height,
-            lamp_radius: 0.0,
+            lamp_radius,
             census: Default::default(),
         };
         let (image, mask) = match &options.reference {
@@ -310,9 +311,8 @@ impl Bench {
                     spp,
                     ..settings.clone()
                 };
-                let (sequence, placed) = self.fresh(&area)?;
+                let (mut sequence, placed) = self.fresh(&area)?;
                 let started = Instant::now();
-                let mut sequence = sequence;
                 let image = sequence.render(
                     &mut self.backend,
                     &placed,
