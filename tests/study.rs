@@ -97,6 +97,69 @@ fn a_tiny_study_writes_all_four_outputs() {
     assert!(out.join("reference.exr").is_file());
 }
 
+#[test]
+fn a_given_reference_is_measured_against_with_its_mask() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = box_scene(dir.path());
+    let first = dir.path().join("first");
+    let mut args = vec!["study", scene.as_str(), "--quiet"];
+    args.extend(TINY);
+    args.extend(["--methods", "whitted", "--out", first.to_str().unwrap()]);
+    assert!(lmanim(&args).status.success());
+
+    // The same reference from a file, with its left half masked out.
+    let reference = first.join("reference.exr");
+    let mask = dir.path().join("mask.exr");
+    let mut left = Image::filled(48, 27, Vec4::ZERO);
+    for (i, pixel) in left.pixels.iter_mut().enumerate() {
+        if i % 48 < 24 {
+            *pixel = Vec4::ONE;
+        }
+    }
+    write_exr(&mask, &left, ExrPrecision::Half).unwrap();
+    let second = dir.path().join("second");
+    let output = lmanim(&[
+        "study",
+        &scene,
+        "--quiet",
+        "--width",
+        "48",
+        "--height",
+        "27",
+        "--methods",
+        "whitted",
+        "--reference",
+        reference.to_str().unwrap(),
+        "--reference-mask",
+        mask.to_str().unwrap(),
+        "--out",
+        second.to_str().unwrap(),
+    ]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let json = |dir: &Path| -> serde_json::Value {
+        serde_json::from_str(&text(&dir.join("study.json"))).unwrap()
+    };
+    let (first, second) = (json(&first), json(&second));
+    assert!(second["reference"]["source"]
+        .as_str()
+        .unwrap()
+        .ends_with("reference.exr"));
+    assert!(second["reference"]["estimated_noise"].is_null());
+    let count = |json: &serde_json::Value, key: &str| json["reference"][key].as_u64().unwrap();
+    assert_eq!(count(&first, "masked_pixels"), 0);
+    let masked = count(&second, "masked_pixels");
+    assert!(masked > 0);
+    assert_eq!(
+        count(&first, "lit_pixels") + count(&first, "edge_pixels"),
+        count(&second, "lit_pixels") + count(&second, "edge_pixels") + masked,
+        "the mask takes pixels out of those measured, and only those"
+    );
+}
+
 /// Asserts exit code 2 and one line on stderr holding `needle`.
 fn assert_bad_input(output: &Output, needle: &str) {
     let stderr = String::from_utf8_lossy(&output.stderr);
