@@ -15,3 +15,4 @@ pub mod schedule;
 pub mod sequence;
 pub mod settings;
 pub mod stats;
+pub mod study;

@@ -2,8 +2,10 @@
 //! 0 on success, 2 for bad usage or bad input, 1 for other failures.
 //!
 //! `lmanim SCENE [flags]` renders; `lmanim inspect SCENE [flags]` prints the
-//! animation's poses as JSON instead. (A scene file literally named
-//! `inspect` is rendered as `lmanim ./inspect`.)
+//! animation's poses as JSON instead; `lmanim study SCENE --out DIR`
+//! measures what each method's accuracy costs in time on one frame. (A
+//! scene file literally named `inspect` or `study` is rendered as
+//! `lmanim ./inspect`.)
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -19,8 +21,9 @@ use lmanim::import;
 use lmanim::output::{self, ExrPrecision, FramePattern};
 use lmanim::schedule::{FrameSet, Timeline};
 use lmanim::sequence::{self, Job};
-use lmanim::settings::{BackendKind, Method, Settings};
+use lmanim::settings::{BackendKind, LightMeshSettings, Method, Settings};
 use lmanim::stats::RunStats;
+use lmanim::study::{self, StudyOptions};
 
 /// Render a glTF scene's animation to an EXR image sequence, with soft
 /// shadows from point lights by the Light Meshes Method.
@@ -43,6 +46,51 @@ enum Command {
     /// Print the animated pose (node transforms, morph weights, lights and
     /// cameras in world space) at chosen times as JSON, without rendering.
     Inspect(InspectArgs),
+    /// Measure error against time on one frame: a reference, then every
+    /// method over its settings, with tables and plots in --out.
+    Study(StudyArgs),
+}
+
+#[derive(Debug, Args)]
+struct StudyArgs {
+    /// The scene: a .gltf or .glb file.
+    scene: PathBuf,
+    /// The frame to study (at the settings file's fps).
+    #[arg(long, default_value_t = 0)]
+    frame: u32,
+    /// Image width in pixels [default: the settings file's, or 640].
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height in pixels [default: the settings file's, or 360].
+    #[arg(long)]
+    height: Option<u32>,
+    /// Measure against this EXR (e.g. another renderer's) instead of
+    /// rendering a reference.
+    #[arg(long, value_name = "REF.exr")]
+    reference: Option<PathBuf>,
+    /// Leave out the pixels where this EXR is above 0.
+    #[arg(long, value_name = "MASK.exr", requires = "reference")]
+    reference_mask: Option<PathBuf>,
+    /// Samples per pixel of the rendered reference (method area).
+    #[arg(long, default_value_t = study::DEFAULT_REFERENCE_SPP, conflicts_with = "reference")]
+    reference_spp: u32,
+    /// Methods to sweep, comma-separated.
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "whitted,lmm,lmm1,area"
+    )]
+    methods: Vec<Method>,
+    /// Directory for study.json, study.csv, study.png, crops.png and reference.exr.
+    #[arg(long)]
+    out: PathBuf,
+    /// Worker threads (default: one per core).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Print nothing but errors.
+    #[arg(long)]
+    quiet: bool,
 }
 
 #[derive(Debug, Args)]
@@ -106,6 +154,12 @@ struct RenderArgs {
     /// Worker threads (default: one per core).
     #[arg(long)]
     threads: Option<usize>,
+    /// Light-mesh lattice step in metres [default: from the lamp radii].
+    #[arg(long = "h", value_name = "METRES", allow_negative_numbers = true)]
+    h: Option<f32>,
+    /// Light-mesh interpolation radius in lattice steps (the paper's kI).
+    #[arg(long, value_name = "K", allow_negative_numbers = true)]
+    ki: Option<f32>,
     /// Also write a tone-mapped sRGB PNG preview beside each frame.
     #[arg(long)]
     png: bool,
@@ -172,6 +226,10 @@ fn main() -> ExitCode {
         (Some(Command::Inspect(args)), _) => {
             init_logging(false);
             run_inspect(args)
+        }
+        (Some(Command::Study(args)), _) => {
+            init_logging(args.quiet);
+            run_study(args)
         }
         (None, Some(render)) => {
             init_logging(render.quiet);
@@ -337,6 +395,18 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     settings.contact_sheet = flags.contact_sheet.clone().or(settings.contact_sheet);
     settings.sheet_columns = flags.sheet_columns.unwrap_or(settings.sheet_columns);
     settings.sheet_every = flags.sheet_every.unwrap_or(settings.sheet_every);
+    if let Some(h) = flags.h {
+        let fault = LightMeshSettings::h_fault(h);
+        let fault = fault.map(|fault| anyhow::anyhow!("--h {h}: {fault}"));
+        fault.map_or(Ok(()), |fault| Err(Failure::bad_input(fault)))?;
+        settings.lightmesh.h = Some(h);
+    }
+    if let Some(ki) = flags.ki {
+        let fault = LightMeshSettings::ki_fault(ki);
+        let fault = fault.map(|fault| anyhow::anyhow!("--ki {ki}: {fault}"));
+        fault.map_or(Ok(()), |fault| Err(Failure::bad_input(fault)))?;
+        settings.lightmesh.ki = ki;
+    }
     if flags.no_cache {
         settings.cache_dir = None;
     } else if let Some(dir) = &flags.cache {
@@ -381,6 +451,35 @@ fn run_inspect(args: &InspectArgs) -> Result<(), Failure> {
     let mut stdout = std::io::stdout().lock();
     serde_json::to_writer_pretty(&mut stdout, &report).context("writing the report")?;
     writeln!(stdout).context("writing the report")?;
+    Ok(())
+}
+
+/// `lmanim study`: progress on stderr, results in --out.
+fn run_study(args: &StudyArgs) -> Result<(), Failure> {
+    let options = StudyOptions {
+        scene: args.scene.clone(),
+        frame: args.frame,
+        width: args.width,
+        height: args.height,
+        reference: args.reference.clone(),
+        reference_mask: args.reference_mask.clone(),
+        reference_spp: args.reference_spp,
+        methods: args.methods.clone(),
+        out: args.out.clone(),
+        threads: args.threads,
+    };
+    study::run(&options, |line| {
+        if !args.quiet {
+            eprintln!("study: {line}");
+        }
+    })
+    .map_err(|error| Failure {
+        bad_input: error.is_bad_input(),
+        error: error.into(),
+    })?;
+    if !args.quiet {
+        eprintln!("study: results in {}", args.out.display());
+    }
     Ok(())
 }
 

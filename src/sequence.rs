@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use crate::accel::World;
 use crate::anim::pose::ClipSelection;
-use crate::backend::{Backend, BackendError, RenderError};
+use crate::backend::{Backend, BackendError, CpuBackend, RenderError};
 use crate::import::{self, ImportError};
 use crate::lightmesh::persistent::PersistentLightMesh;
 use crate::lightmesh::{LightMesh, LightMeshError};
@@ -247,17 +247,13 @@ impl Sequence {
         } else {
             None
         };
-        let job = FrameJob {
-            scene: &self.scene,
-            frame: placed,
-            world: &self.world,
-            width: settings.width,
-            height: settings.height,
-            spp: settings.spp,
-            max_depth: settings.max_depth,
-        };
         let image = backend
-            .render(&job, settings.method, light_mesh, stats)
+            .render(
+                &frame_job(&self.scene, &self.world, placed, settings),
+                settings.method,
+                light_mesh,
+                stats,
+            )
             .map_err(|error| match error {
                 RenderError::LightMesh(source) => RunError::LightMesh {
                     file: self.scene_file.clone(),
@@ -271,6 +267,38 @@ impl Sequence {
         }
         self.last_image = Some(image.clone());
         Ok(image)
+    }
+
+    /// Renders the placed frame with every light visible from every point,
+    /// on the CPU: what each pixel would get without shadows, the measure
+    /// of how shadowed a pixel is (see `study`). Keeps no image.
+    pub fn render_unshadowed(
+        &self,
+        cpu: &CpuBackend,
+        placed: &FrameScene,
+        settings: &Settings,
+        stats: &mut FrameStats,
+    ) -> output::Image {
+        let job = frame_job(&self.scene, &self.world, placed, settings);
+        cpu.render_unshadowed(&job, stats)
+    }
+}
+
+/// What the backend needs to render `placed` with `settings`.
+fn frame_job<'a>(
+    scene: &'a SceneDesc,
+    world: &'a World,
+    placed: &'a FrameScene,
+    settings: &Settings,
+) -> FrameJob<'a> {
+    FrameJob {
+        scene,
+        frame: placed,
+        world,
+        width: settings.width,
+        height: settings.height,
+        spp: settings.spp,
+        max_depth: settings.max_depth,
     }
 }
 

@@ -191,6 +191,20 @@ impl Default for LightMeshSettings {
     }
 }
 
+impl LightMeshSettings {
+    /// Why `h` cannot be a lattice step, if it cannot: shared by the
+    /// settings file's check and the `--h` flag's.
+    pub fn h_fault(h: f32) -> Option<String> {
+        (!h.is_finite() || h <= 0.0).then(|| "it must be a positive number of metres".into())
+    }
+
+    /// Why `ki` cannot be an interpolation radius, if it cannot.
+    pub fn ki_fault(ki: f32) -> Option<String> {
+        (!ki.is_finite() || ki <= 0.0 || ki > MAX_KI)
+            .then(|| format!("it must be above 0 and at most {MAX_KI}"))
+    }
+}
+
 /// Why a settings file could not be used.
 #[derive(Debug, thiserror::Error)]
 pub enum SettingsError {
@@ -289,14 +303,13 @@ impl Settings {
             return Err("threads is 0; leave it out to use every core".into());
         }
         let lightmesh = &self.lightmesh;
-        if !lightmesh.ki.is_finite() || lightmesh.ki <= 0.0 || lightmesh.ki > MAX_KI {
-            return Err(format!(
-                "lightmesh.ki is {}; it must be above 0 and at most {MAX_KI}",
-                lightmesh.ki
-            ));
+        if let Some(fault) = LightMeshSettings::ki_fault(lightmesh.ki) {
+            return Err(format!("lightmesh.ki is {}; {fault}", lightmesh.ki));
         }
-        if let Some(h) = lightmesh.h.filter(|h| !h.is_finite() || *h <= 0.0) {
-            return Err(format!("lightmesh.h is {h}; it must be positive"));
+        if let Some((h, fault)) =
+            (lightmesh.h).and_then(|h| Some((h, LightMeshSettings::h_fault(h)?)))
+        {
+            return Err(format!("lightmesh.h is {h}; {fault}"));
         }
         let bad_radius = |r: f32| !r.is_finite() || r < 0.0;
         if let Some(r) = self.lamps.default_radius.filter(|&r| bad_radius(r)) {

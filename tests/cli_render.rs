@@ -171,8 +171,41 @@ fn bad_usage_exits_2_with_one_line() {
         &lmanim(&[&scene, "--clip", "Nope", "--out", "/tmp/x.#.exr"]),
         "--clip",
     );
+    assert_bad_usage(&lmanim(&[&scene, "--h", "-1"]), "--h -1");
+    assert_bad_usage(&lmanim(&[&scene, "--ki", "9"]), "--ki 9");
     // Clap's own usage errors keep its exit code 2 (several lines of help).
     assert_eq!(lmanim(&[&scene, "--spp", "many"]).status.code(), Some(2));
+}
+
+#[test]
+fn lattice_flags_set_h_and_ki() {
+    let dir = tempfile::tempdir().unwrap();
+    let stats = dir.path().join("stats.json");
+    let pattern = dir.path().join("f.#.exr");
+    let output = lmanim(&[
+        &courtyard(),
+        "--width",
+        "32",
+        "--height",
+        "18",
+        "--method",
+        "lmm1",
+        "--h",
+        "0.2",
+        "--ki",
+        "2.1",
+        "--no-cache",
+        "--stats",
+        stats.to_str().unwrap(),
+        "--out",
+        pattern.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(stderr(&output).contains("h = 0.2000 m (set), kI = 2.1"));
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    let mesh = &json["frames"][0]["lightmesh"];
+    assert_eq!(mesh["h"].as_f64().map(|h| h as f32), Some(0.2));
+    assert_eq!(mesh["ki"].as_f64().map(|k| k as f32), Some(2.1));
 }
 
 #[test]

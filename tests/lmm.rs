@@ -197,11 +197,14 @@ fn small_occluders_get_an_inward_penumbra() {
     );
 }
 
-/// A floor meeting a lit wall: LMM1 counts nodes behind the wall, which do
-/// not see the light, and darkens the floor along the corner; LMM's
-/// point-to-node tests drop them.
+/// A floor meeting a lit one-sided wall: LMM1 would count the nodes behind
+/// the wall, which do not see the light, and darken the floor along the
+/// corner; LMM's point-to-node tests drop them all. LMM1 drops those its
+/// probes find behind the wall (`lightmesh::enclosure`); the ones by the
+/// floor see the floor's front as often as the wall's back and stay, so
+/// some darkening remains.
 #[test]
-fn lmm1_darkens_a_concave_corner_and_lmm_does_not() {
+fn lmm1_darkens_a_concave_corner_a_little_and_lmm_not_at_all() {
     let corner = || {
         let mut scene = empty_scene();
         let m = add_material(&mut scene, lambert(Vec3::splat(0.5)));
@@ -255,9 +258,10 @@ fn lmm1_darkens_a_concave_corner_and_lmm_does_not() {
         (lmm_ratio - 1.0).abs() < 1e-5,
         "LMM equals Whitted at the corner: {lmm_ratio}"
     );
+    // Without the enclosure flag the corner fell below 0.9.
     assert!(
-        lmm1_ratio < 0.9,
-        "LMM1 leaks darkness from behind the wall: {lmm1_ratio}"
+        (0.92..0.999).contains(&lmm1_ratio),
+        "LMM1 leaks a little darkness from behind the wall: {lmm1_ratio}"
     );
 }
 

@@ -30,6 +30,7 @@ mod error;
 mod json;
 pub mod samples;
 pub mod shapes;
+pub mod study;
 
 pub use builder::GltfBuilder;
 pub use error::AuthoringError;

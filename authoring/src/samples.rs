@@ -16,6 +16,10 @@
 //! skinned trees swaying along the main street and a 10 s camera
 //! fly-through ("flythrough"). Its settings are in the hand-written
 //! `city.ron`.
+//!
+//! `study-box.gltf`, `study-leaves.gltf`, `study-street.gltf` and
+//! `study-wall.gltf` are the stills of `lmanim study` (STUDY.md), from
+//! [`crate::study`].
 
 use std::f32::consts::PI;
 
@@ -24,6 +28,7 @@ use lmanim::scene::animation::{AnimationClip, Channel, Interpolation, Sampler, T
 use lmanim::scene::{Camera, Light, LightKind, Material, Projection};
 
 use crate::city::{city_block, CityParams};
+use crate::study::StudyScene;
 use crate::{
     look_at_rotation, matte, shapes, AuthoringError, GltfBuilder, MeshId, NodeDesc, NodeId,
     Primitive,
@@ -36,7 +41,7 @@ pub struct Sample {
 }
 
 /// Every sample scene, in the order they are written.
-pub const SAMPLES: [Sample; 2] = [
+pub const SAMPLES: [Sample; 6] = [
     Sample {
         file_name: "courtyard.gltf",
         build: courtyard,
@@ -44,6 +49,22 @@ pub const SAMPLES: [Sample; 2] = [
     Sample {
         file_name: "city.gltf",
         build: city,
+    },
+    Sample {
+        file_name: "study-box.gltf",
+        build: || StudyScene::Box.build(),
+    },
+    Sample {
+        file_name: "study-leaves.gltf",
+        build: || StudyScene::Leaves.build(),
+    },
+    Sample {
+        file_name: "study-street.gltf",
+        build: || StudyScene::Street.build(),
+    },
+    Sample {
+        file_name: "study-wall.gltf",
+        build: || StudyScene::Wall.build(),
     },
 ];
 

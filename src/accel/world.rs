@@ -210,6 +210,14 @@ impl World {
         best.map(Hit::from)
     }
 
+    /// The closest hit in `(0, t_max)` on static geometry alone, with the
+    /// tie rule of [`World::closest_hit`].
+    pub fn closest_static_hit(&self, ray: &Ray) -> Option<Hit> {
+        let mut best = None;
+        self.static_bvh.closest_hit(ray, &mut best);
+        best.map(Hit::from)
+    }
+
     /// Whether no static triangle may meet `shaft`; false when unsure.
     pub fn shaft_is_clear_static(&self, shaft: &Shaft) -> bool {
         self.static_bvh.shaft_is_empty(shaft)

@@ -10,9 +10,10 @@
 //! Every stage collects in a fixed order and sums sequentially, so the image
 //! is the same for any thread count.
 
+use std::convert::Infallible;
 use std::time::Instant;
 
-use glam::{UVec2, Vec3, Vec4};
+use glam::{UVec2, Vec3};
 use rayon::prelude::*;
 
 use super::band::{bands, resolve, shaded_value, TILE};
@@ -56,36 +57,82 @@ impl CpuBackend {
         mut light_mesh: Option<&mut LightMesh>,
         stats: &mut FrameStats,
     ) -> Result<Image, RenderError> {
+        let mut counts = PointCounts::default();
+        let mut lightmesh = LightMeshStats::default();
+        let image = self.render_bands(job, stats, |lanes, rows, points, stats| {
+            let (shaded, band_counts) = shade_by_method(
+                job,
+                lanes,
+                rows,
+                points,
+                method,
+                light_mesh.as_deref_mut(),
+                stats,
+                &mut lightmesh,
+            )?;
+            counts += band_counts;
+            Ok::<_, RenderError>(shaded)
+        })?;
+        if let (true, Some(mesh)) = (method.uses_light_mesh(), light_mesh) {
+            let points = stats.shading_points.max(1) as f64;
+            stats.lightmesh = Some(LightMeshStats {
+                h: mesh.lattice.h,
+                ki: mesh.ki,
+                mean_candidates: counts.candidates as f64 / points,
+                mean_interp_set: counts.interp_set as f64 / points,
+                mean_p2n_tests: counts.p2n_tests as f64 / points,
+                fallback_points: counts.fallback,
+                bits_cached: mesh.masks().known_bits(),
+                ..lightmesh
+            });
+        }
+        Ok(image)
+    }
+
+    /// Renders one frame with every light visible from every point
+    /// (formula (1) with V = 1): the light each pixel would get without
+    /// shadows, against which the study measures how shadowed a pixel is.
+    pub fn render_unshadowed(&self, job: &FrameJob, stats: &mut FrameStats) -> Image {
+        let unshadowed = self.render_bands(job, stats, |lanes, _, points, stats| {
+            let shade = |_: &mut (), _, point: &ShadingPoint| {
+                (
+                    whitted::unshadowed_light(point, lanes),
+                    PointCounts::default(),
+                )
+            };
+            Ok::<_, Infallible>(shade_stage(points, stats, || (), shade).0)
+        });
+        match unshadowed {
+            Ok(image) => image,
+            Err(never) => match never {},
+        }
+    }
+
+    /// The frame band by band: hits (stages 1–2), then `shade` gives each
+    /// shading point its value, then samples are resolved to pixels.
+    fn render_bands<E: Send>(
+        &self,
+        job: &FrameJob,
+        stats: &mut FrameStats,
+        mut shade: impl FnMut(
+                &LightLanes,
+                std::ops::Range<u32>,
+                &[ShadingPoint],
+                &mut FrameStats,
+            ) -> Result<Vec<Vec3>, E>
+            + Send,
+    ) -> Result<Image, E> {
         self.pool.install(|| {
             let mut pixels = Vec::with_capacity((job.width * job.height) as usize);
-            let mut counts = PointCounts::default();
-            let mut lightmesh = LightMeshStats::default();
             let lanes = LightLanes::new(&job.frame.lights);
             for rows in bands(job) {
-                let (band, band_counts) = render_band(
-                    job,
-                    &lanes,
-                    rows,
-                    method,
-                    light_mesh.as_deref_mut(),
-                    stats,
-                    &mut lightmesh,
-                )?;
-                pixels.extend(band);
-                counts += band_counts;
-            }
-            if let (true, Some(mesh)) = (method.uses_light_mesh(), light_mesh) {
-                let points = stats.shading_points.max(1) as f64;
-                stats.lightmesh = Some(LightMeshStats {
-                    h: mesh.lattice.h,
-                    ki: mesh.ki,
-                    mean_candidates: counts.candidates as f64 / points,
-                    mean_interp_set: counts.interp_set as f64 / points,
-                    mean_p2n_tests: counts.p2n_tests as f64 / points,
-                    fallback_points: counts.fallback,
-                    bits_cached: mesh.masks().known_bits(),
-                    ..lightmesh
-                });
+                let band_samples = ((rows.end - rows.start) * job.width * job.spp) as usize;
+                let (points, primary_count) = hits(job, rows.clone(), stats);
+                let shaded = shade(&lanes, rows, &points, stats)?;
+                stats.shading_points += points.len() as u64;
+                let start = Instant::now();
+                pixels.extend(resolve(job, band_samples, &points, primary_count, &shaded));
+                stats.add_stage_time("resolve", start.elapsed().as_secs_f64());
             }
             Ok(Image {
                 width: job.width,
@@ -96,21 +143,16 @@ impl CpuBackend {
     }
 }
 
-/// One band of rows through every stage: its pixels, and what shading its
-/// points cost (summed into the frame's light-mesh statistics).
-fn render_band(
+/// Stages 1–2 for one band of rows: the camera rays' hits, then the
+/// Whitted recursion's, level by level; also how many hits are primary.
+fn hits(
     job: &FrameJob,
-    lanes: &LightLanes,
     rows: std::ops::Range<u32>,
-    method: Method,
-    light_mesh: Option<&mut LightMesh>,
     stats: &mut FrameStats,
-    lightmesh: &mut LightMeshStats,
-) -> Result<(Vec<Vec4>, PointCounts), RenderError> {
+) -> (Vec<ShadingPoint>, usize) {
     let band_samples = ((rows.end - rows.start) * job.width * job.spp) as usize;
-
     let start = Instant::now();
-    let primary = primary_hits(job, rows.clone());
+    let primary = primary_hits(job, rows);
     stats.rays.primary += band_samples as u64;
     stats.add_stage_time("primary", start.elapsed().as_secs_f64());
 
@@ -128,12 +170,27 @@ fn render_band(
         points.extend(next);
     }
     stats.add_stage_time("secondary", start.elapsed().as_secs_f64());
+    (points, primary_count)
+}
 
+/// The shading stages of one band by `method` (for the light-mesh methods
+/// demand and fill first): each point's value, and what shading cost.
+#[allow(clippy::too_many_arguments)]
+fn shade_by_method(
+    job: &FrameJob,
+    lanes: &LightLanes,
+    rows: std::ops::Range<u32>,
+    points: &[ShadingPoint],
+    method: Method,
+    light_mesh: Option<&mut LightMesh>,
+    stats: &mut FrameStats,
+    lightmesh: &mut LightMeshStats,
+) -> Result<(Vec<Vec3>, PointCounts), RenderError> {
     let lights = &job.frame.lights;
     let segments_before = lightmesh.fill_segments;
     let (shaded, band_counts): (Vec<Vec3>, PointCounts) = match (method, light_mesh) {
         (Method::Whitted, _) => shade_stage(
-            &points,
+            points,
             stats,
             || (),
             |_, _, point| {
@@ -146,7 +203,7 @@ fn render_band(
             // image; `point.sample` counts from the band's first row.
             let band_start = rows.start as u64 * job.width as u64 * job.spp as u64;
             shade_stage(
-                &points,
+                points,
                 stats,
                 || (),
                 |_, _, point| {
@@ -161,17 +218,23 @@ fn render_band(
         }
         (Method::Lmm | Method::Lmm1, Some(mesh)) => {
             let start = Instant::now();
-            let demand = mesh.demand(&points, lanes)?;
+            let demand = mesh.demand(points, lanes)?;
             stats.add_stage_time("demand", start.elapsed().as_secs_f64());
 
             let start = Instant::now();
             mesh.fill(&demand, lights, job.world, lightmesh)?;
             stats.add_stage_time("fill", start.elapsed().as_secs_f64());
 
+            if !method.tests_point_to_node() {
+                let start = Instant::now();
+                lightmesh.nodes_probed += mesh.settle_enclosure(&demand, job.world);
+                stats.add_stage_time("enclosure", start.elapsed().as_secs_f64());
+            }
+
             let mesh = &*mesh;
             let point_to_node_tests = method.tests_point_to_node();
             let scratch = || Scratch::new(mesh);
-            shade_stage(&points, stats, scratch, |scratch, index, point| {
+            shade_stage(points, stats, scratch, |scratch, index, point| {
                 mesh.shade(
                     point,
                     demand.reach_of(index),
@@ -188,12 +251,7 @@ fn render_band(
     // node-to-light ones and LMM's point-to-node tests.
     stats.rays.shadow +=
         band_counts.shadow_rays + band_counts.p2n_tests + lightmesh.fill_segments - segments_before;
-    stats.shading_points += points.len() as u64;
-
-    let start = Instant::now();
-    let pixels = resolve(job, band_samples, &points, primary_count, &shaded);
-    stats.add_stage_time("resolve", start.elapsed().as_secs_f64());
-    Ok((pixels, band_counts))
+    Ok((shaded, band_counts))
 }
 
 /// The last stage before resolve: every point's emission plus its direct

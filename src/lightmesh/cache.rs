@@ -1,4 +1,4 @@
-//! The disk cache of static-layer masks (DESIGN.md, "Light mesh"): the bits
+//! The disk cache of static-layer masks (ARCHITECTURE.md, "The light mesh"): the bits
 //! that say whether the segment from a node to a light misses the *static*
 //! geometry depend only on that geometry, the lattice and the light's
 //! position, so a later run (or another worker rendering another frame

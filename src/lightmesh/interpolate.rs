@@ -4,11 +4,13 @@
 //!           = Σ_i Omega(i, P) · (visible nodes of light i) / m,
 //!
 //! with Omega always evaluated at P. LMM keeps only the nodes that P sees
-//! (step 3, one short segment each); LMM1 skips that test. An empty set
-//! falls back to formula (1) with real shadow rays.
+//! (step 3, one short segment each); LMM1 skips that test and leaves out
+//! only the nodes inside closed geometry (`super::enclosure`). An empty
+//! set falls back to formula (1) with real shadow rays.
 
 use glam::{IVec3, Vec3};
 
+use super::enclosure::blocks_some;
 use super::masks::BrickCache;
 use super::LightMesh;
 use crate::accel::offset::offset_ray_origin;
@@ -105,6 +107,16 @@ impl LightMesh {
             nodes.retain(|&node| {
                 let x = lattice.node_position(node);
                 !world.occluded(&Ray::new(origin, x - origin, 1.0))
+            });
+        } else {
+            // LMM1's stand-in for those tests: nodes inside closed
+            // geometry, settled once per node by the enclosure stage,
+            // where they are blocked from a light the point asks for.
+            nodes.retain(|&node| {
+                !(bricks.is_enclosed(node)
+                    && bricks
+                        .mask(node)
+                        .is_some_and(|mask| blocks_some(&mask, reach)))
             });
         }
         let m = nodes.len();

@@ -1,4 +1,4 @@
-//! Invalidation between frames (DESIGN.md, "Invalidation rule"): a
+//! Invalidation between frames (ARCHITECTURE.md, "The light mesh"): a
 //! (node x, light i) bit can change only if the segment [x, L_i] meets a
 //! region where geometry changed, or light i itself moved. The regions are
 //! the old and the new world bounds of every rigidly moved object, and for

@@ -1,7 +1,8 @@
 //! Node masks: per lattice node and light, visibility in two layers, as
-//! DESIGN.md has it: a *static* layer (does the segment from the node to the
-//! light miss the static geometry?) and a *dynamic* layer (does a dynamic
-//! object block it?), each with its own validity bits; the node sees the
+//! ARCHITECTURE.md has it ("The light mesh"): a *static* layer (does the
+//! segment from the node to the light miss the static geometry?) and a
+//! *dynamic* layer (does a dynamic object block it?), each with its own
+//! validity bits; the node sees the
 //! light when the static bit is set and no dynamic object blocks it. Moving
 //! objects invalidate only dynamic bits, so re-testing them costs short
 //! traversals of the small dynamic structure; only a moved light touches the
@@ -33,7 +34,7 @@ pub struct MaskStore {
 
 /// One brick's bits, and which lights have a valid dynamic bit in it.
 #[derive(Clone, Debug)]
-struct Brick {
+pub struct Brick {
     /// Per node slot, [`GROUPS`] groups of `words` words.
     nodes: Box<[u64]>,
     /// Per word, the lights of which some node holds a valid dynamic bit:
@@ -41,6 +42,10 @@ struct Brick {
     /// passes over a light's bricks that hold nothing of it without
     /// reading their 512 nodes.
     dynamic_lights: Box<[u64]>,
+    /// Per node slot, one bit each: whether the node lies inside closed
+    /// static geometry ([`super::enclosure`]), and whether that is known.
+    /// It depends on the static geometry alone, so nothing invalidates it.
+    enclosure: BrickEnclosure,
 }
 
 impl Brick {
@@ -48,8 +53,18 @@ impl Brick {
         Brick {
             nodes: vec![0; BRICK_NODES * GROUPS * words].into_boxed_slice(),
             dynamic_lights: vec![0; words].into_boxed_slice(),
+            enclosure: BrickEnclosure::default(),
         }
     }
+}
+
+/// Which nodes of a brick lie inside closed geometry, one bit per slot
+/// (bit `slot % 64` of word `slot / 64`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BrickEnclosure {
+    pub known: [u64; BRICK_WORDS],
+    /// Set only where `known` is.
+    pub enclosed: [u64; BRICK_WORDS],
 }
 
 /// Groups of `words` words per node, in this order.
@@ -320,6 +335,30 @@ impl MaskStore {
         self.nodes
     }
 
+    /// The enclosure flags of a brick's nodes (none known for a brick the
+    /// store does not hold).
+    pub fn enclosure(&self, brick: IVec3) -> BrickEnclosure {
+        self.bricks
+            .get(&brick)
+            .map_or_else(BrickEnclosure::default, |stored| stored.enclosure)
+    }
+
+    /// Records the enclosure flags settled for the `known` slots of a brick.
+    pub fn merge_enclosure(&mut self, brick: IVec3, settled: &BrickEnclosure) {
+        let words = self.words;
+        let stored = &mut self
+            .bricks
+            .entry(brick)
+            .or_insert_with(|| Brick::new(words))
+            .enclosure;
+        for word in 0..BRICK_WORDS {
+            let known = settled.known[word];
+            stored.enclosed[word] =
+                (stored.enclosed[word] & !known) | (settled.enclosed[word] & known);
+            stored.known[word] |= known;
+        }
+    }
+
     /// One light's static-layer bits in each brick where it has a valid
     /// one, for the disk cache.
     pub fn static_bits_of(
@@ -471,8 +510,8 @@ pub struct BrickCache<'a> {
     entries: [Option<CachedBrick<'a>>; 8],
 }
 
-/// A brick's coordinates and its bits, None when the store has none.
-type CachedBrick<'a> = (IVec3, Option<&'a [u64]>);
+/// A brick's coordinates and the brick, None when the store has none.
+type CachedBrick<'a> = (IVec3, Option<&'a Brick>);
 
 impl<'a> BrickCache<'a> {
     pub fn new(store: &'a MaskStore) -> BrickCache<'a> {
@@ -485,16 +524,29 @@ impl<'a> BrickCache<'a> {
     /// The node's mask, or None when no bit of its brick was ever computed.
     pub fn mask(&mut self, node: IVec3) -> Option<NodeMask<'a>> {
         let (brick, slot) = split(node);
+        let stored = self.brick(brick)?;
+        Some(self.store.slot_mask(&stored.nodes, slot))
+    }
+
+    /// Whether the node is known to lie inside closed geometry.
+    pub fn is_enclosed(&mut self, node: IVec3) -> bool {
+        let (brick, slot) = split(node);
+        self.brick(brick).is_some_and(|stored| {
+            let bit = 1 << (slot % 64);
+            stored.enclosure.enclosed[slot / 64] & bit != 0
+        })
+    }
+
+    fn brick(&mut self, brick: IVec3) -> Option<&'a Brick> {
         let entry = parity(brick);
-        let bits = match self.entries[entry] {
-            Some((cached, bits)) if cached == brick => bits,
+        match self.entries[entry] {
+            Some((cached, stored)) if cached == brick => stored,
             _ => {
-                let bits = self.store.brick(brick);
-                self.entries[entry] = Some((brick, bits));
-                bits
+                let stored = self.store.bricks.get(&brick);
+                self.entries[entry] = Some((brick, stored));
+                stored
             }
-        };
-        bits.map(|bits| self.store.slot_mask(bits, slot))
+        }
     }
 }
 

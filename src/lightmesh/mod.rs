@@ -5,10 +5,13 @@
 //! In a frame it takes three stages after the hits are known: `demand`
 //! (which (node, light) bits the shading points need), `fill` (compute the
 //! missing ones, the only writer of the masks) and `shade` (formula (2),
-//! with or without the point-to-node tests of LMM).
+//! with or without the point-to-node tests of LMM). LMM1 runs one more,
+//! `enclosure`, after the fill: which nodes lie inside closed geometry,
+//! which its formula (2) leaves out.
 
 pub mod cache;
 pub mod demand;
+pub mod enclosure;
 pub mod fill;
 pub mod interpolate;
 pub mod invalidate;
@@ -86,6 +89,9 @@ pub struct LightMeshStats {
     pub mean_p2n_tests: f64,
     /// Points shaded by formula (1) because their set was empty.
     pub fallback_points: u64,
+    /// Nodes probed for lying inside closed geometry this frame (LMM1
+    /// only; each node once per run).
+    pub nodes_probed: u64,
     /// Static bits imported from the disk cache this frame (only the
     /// frame that made the light mesh loads any).
     pub bits_loaded: u64,

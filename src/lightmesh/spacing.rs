@@ -15,17 +15,23 @@ pub fn default_h(lights: &[RenderLight], ki: f32, scene_diameter: f32) -> f32 {
     } else {
         1.0
     };
+    let h = match median_lamp_radius(lights) {
+        Some(median) => median / ki,
+        None => diameter / 400.0,
+    };
+    h.clamp(diameter / 4000.0, diameter / 20.0)
+}
+
+/// The median radius of the positional lights that have one: the R that
+/// the default lattice step follows. None when no such light has a radius.
+pub fn median_lamp_radius(lights: &[RenderLight]) -> Option<f32> {
     let mut radii: Vec<f32> = lights
         .iter()
         .filter(|light| light.position().is_some() && light.lamp_radius > 0.0)
         .map(|light| light.lamp_radius)
         .collect();
     radii.sort_by(f32::total_cmp);
-    let h = match radii.get(radii.len() / 2) {
-        Some(median) => median / ki,
-        None => diameter / 400.0,
-    };
-    h.clamp(diameter / 4000.0, diameter / 20.0)
+    radii.get(radii.len() / 2).copied()
 }
 
 #[cfg(test)]

@@ -18,7 +18,7 @@ pub use error::OutputError;
 pub use exr::{read_exr, write_exr};
 pub use label::FONT;
 pub use pattern::FramePattern;
-pub use png::{tone_map, write_png_preview};
+pub use png::{tone_map, write_png_preview, write_srgb_png};
 
 use glam::Vec4;
 

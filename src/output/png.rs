@@ -36,12 +36,41 @@ pub fn preview_bytes(image: &Image, exposure: f32) -> Vec<u8> {
         .collect()
 }
 
-/// Writes the RGBA8 `bytes` of a `width` × `height` image to `path` as a
-/// PNG, atomically.
+/// Writes the 8-bit sRGB RGBA `bytes` of a `width` × `height` image (a
+/// preview or a contact sheet, already display-ready) as a PNG at `path`,
+/// atomically.
 pub fn write_rgba8(path: &Path, width: u32, height: u32, bytes: &[u8]) -> Result<(), OutputError> {
+    write_png(
+        path,
+        (width, height),
+        bytes,
+        image::ExtendedColorType::Rgba8,
+    )
+}
+
+/// Writes 8-bit sRGB RGB pixels, row-major from the top (a plot, already
+/// display-ready), as a PNG at `path`, atomically.
+pub fn write_srgb_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), OutputError> {
+    if rgb.len() as u64 != 3 * u64::from(width) * u64::from(height) {
+        return Err(OutputError::ImageSize {
+            path: path.to_path_buf(),
+            width,
+            height,
+            pixels: rgb.len() / 3,
+        });
+    }
+    write_png(path, (width, height), rgb, image::ExtendedColorType::Rgb8)
+}
+
+fn write_png(
+    path: &Path,
+    (width, height): (u32, u32),
+    bytes: &[u8],
+    colour: image::ExtendedColorType,
+) -> Result<(), OutputError> {
     write_atomically(path, |writer| {
         image::codecs::png::PngEncoder::new(writer)
-            .write_image(bytes, width, height, image::ExtendedColorType::Rgba8)
+            .write_image(bytes, width, height, colour)
             .map_err(|error| OutputError::Encode {
                 path: path.to_path_buf(),
                 fault: error.to_string(),

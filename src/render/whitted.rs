@@ -24,6 +24,14 @@ pub fn direct_light(point: &ShadingPoint, lights: &LightLanes, world: &World) ->
     (radiance, shadow_rays)
 }
 
+/// Direct light at `point` as formula (1) gives it with every light
+/// visible (V = 1): what the point would get without shadows.
+pub fn unshadowed_light(point: &ShadingPoint, lights: &LightLanes) -> Vec3 {
+    let mut radiance = Vec3::ZERO;
+    light_terms(point, lights, |omega, _| radiance += omega);
+    radiance
+}
+
 /// Formula (1)'s terms at `point`, visibility aside: for each light that
 /// can reach it, in light order, its Omega and the shadow segment that
 /// decides whether it counts. Omega comes eight lights at a time. A

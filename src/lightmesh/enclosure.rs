@@ -1,0 +1,214 @@
+//! Which lattice nodes lie inside closed geometry: LMM1's cheap stand-in
+//! for the point-to-node tests that LMM runs at every shading point.
+//!
+//! Without them, a floor point at the base of a box takes into its
+//! interpolation set the nodes inside the box, which see no light, and its
+//! contact shadow spreads outwards: measured against the physical lamp,
+//! LMM1 was then farther off than hard Whitted shadows (STUDY.md). LMM's
+//! step 3 drops those nodes at the cost of one segment per candidate and
+//! point (some 30 per point at kI = 2.5); this drops them at the cost of
+//! [`PROBES`] short rays per *node*, once, since a node's place in the
+//! static geometry never changes.
+//!
+//! A node is enclosed when, of the probe rays from it that meet static
+//! geometry within [`REACH_IN_RADII`] interpolation radii, more meet a
+//! triangle's back (the side its winding faces away from) than its front.
+//! Inside a closed solid every probe that meets something meets a back;
+//! in the open, only the back of an open (one-sided) surface can be met,
+//! so a node below a floor plane counts as enclosed (as it should: it is
+//! behind the floor for every point above it), while a node under a
+//! one-sided leaf also sees the ground's front and is not. Probes that a
+//! solid's bottom face shares with the floor it rests on may find the
+//! floor's front first; the majority over all directions still decides
+//! for nodes near the base of solids up to a few radii wide (a node near
+//! the base of a much larger solid may not be found: it then keeps LMM1's
+//! old behaviour).
+//!
+//! In a frame this runs after the fill, for LMM1 only, and settles the
+//! nodes the demand named that are blocked from some light and have no
+//! flag yet (see [`blocks_some`]); formula (2) then leaves out enclosed
+//! nodes blocked from some light the point asks for. Only static geometry is probed, so no moving object
+//! can change a flag and reuse stays exact; the flags are not in the disk
+//! cache, so each run probes its nodes once.
+
+use glam::{IVec3, Vec3};
+use rayon::prelude::*;
+
+use super::demand::Demand;
+use super::masks::{join, BrickEnclosure, NodeMask, BRICK_NODES};
+use super::LightMesh;
+use crate::accel::{Ray, World};
+
+/// How far probes reach, in interpolation radii r = kI·h: a node that a
+/// floor point's half-ball holds is within r of that point, so the surface
+/// between them is within r of the node, and twice that leaves room for
+/// probes that meet it at a slant.
+pub const REACH_IN_RADII: f32 = 4.0;
+
+/// Probe directions: the six axes and the eight diagonals, unit length.
+pub const PROBES: [Vec3; 14] = {
+    const D: f32 = 0.577_350_26; // 1/√3
+    [
+        Vec3::X,
+        Vec3::NEG_X,
+        Vec3::Y,
+        Vec3::NEG_Y,
+        Vec3::Z,
+        Vec3::NEG_Z,
+        Vec3::new(D, D, D),
+        Vec3::new(D, D, -D),
+        Vec3::new(D, -D, D),
+        Vec3::new(D, -D, -D),
+        Vec3::new(-D, D, D),
+        Vec3::new(-D, D, -D),
+        Vec3::new(-D, -D, D),
+        Vec3::new(-D, -D, -D),
+    ]
+};
+
+/// Whether the point `at` lies inside closed static geometry, probing
+/// `reach` metres around it (see the module doc).
+pub fn is_enclosed(world: &World, at: Vec3, reach: f32) -> bool {
+    let (mut backs, mut fronts) = (0, 0);
+    for (done, direction) in PROBES.into_iter().enumerate() {
+        // Stop once the probes left cannot change the verdict.
+        let left = PROBES.len() - done;
+        if backs > fronts + left || fronts >= backs + left {
+            break;
+        }
+        if let Some(hit) = world.closest_static_hit(&Ray::new(at, direction, reach)) {
+            if hit.geometric_normal.dot(direction) > 0.0 {
+                backs += 1;
+            } else {
+                fronts += 1;
+            }
+        }
+    }
+    backs > fronts
+}
+
+/// Whether the node of `mask` is known to be blocked from some light of
+/// `lights` (one word per 64 lights). Only such nodes are probed and left
+/// out: a node that sees every light a point asks for votes as an open
+/// node would, wherever it lies, so its flag cannot change the point.
+/// This keeps the probes to nodes in shadow, and makes formula (2) depend
+/// on the current masks and the static geometry only, never on which
+/// frame first asked for a node.
+pub fn blocks_some(mask: &NodeMask, lights: &[u64]) -> bool {
+    (lights.iter().enumerate())
+        .any(|(word, &wanted)| wanted & mask.valid(word) & !mask.visible(word) != 0)
+}
+
+impl LightMesh {
+    /// Settles the enclosure flag of every node `demand` names that is
+    /// blocked from some light it is asked for and has no flag yet, in
+    /// parallel over bricks; returns how many nodes were probed. Runs
+    /// after the fill, which has made every needed bit valid.
+    pub fn settle_enclosure(&mut self, demand: &Demand, world: &World) -> u64 {
+        let reach = REACH_IN_RADII * self.radius();
+        let words = demand.words;
+        let settled: Vec<(IVec3, BrickEnclosure)> = demand
+            .bricks
+            .par_iter()
+            .filter_map(|brick| {
+                let known = self.masks.enclosure(brick.brick).known;
+                let bits = self.masks.brick(brick.brick)?;
+                let mut settled = BrickEnclosure::default();
+                for slot in 0..BRICK_NODES {
+                    let bit = 1u64 << (slot % 64);
+                    let mask = self.masks.slot_mask(bits, slot);
+                    let needed = &brick.needed[slot * words..(slot + 1) * words];
+                    if !blocks_some(&mask, needed) || known[slot / 64] & bit != 0 {
+                        continue;
+                    }
+                    settled.known[slot / 64] |= bit;
+                    let at = self.lattice.node_position(join(brick.brick, slot));
+                    if is_enclosed(world, at, reach) {
+                        settled.enclosed[slot / 64] |= bit;
+                    }
+                }
+                settled
+                    .known
+                    .iter()
+                    .any(|&word| word != 0)
+                    .then_some((brick.brick, settled))
+            })
+            .collect();
+        let mut probed = 0;
+        for (brick, flags) in &settled {
+            probed += flags
+                .known
+                .iter()
+                .map(|w| w.count_ones() as u64)
+                .sum::<u64>();
+            self.masks.merge_enclosure(*brick, flags);
+        }
+        probed
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::{Affine3A, Vec3};
+
+    use super::*;
+    use crate::accel::WorldObject;
+    use crate::authoring::shapes;
+
+    /// A floor (a one-sided plane, 4 m square) and a closed unit box
+    /// resting on it, its bottom face in the floor's plane.
+    fn box_on_floor() -> World {
+        let floor = shapes::plane(glam::Vec2::splat(2.0));
+        let cube = shapes::cuboid(Vec3::splat(0.5));
+        let triangles = |g: &crate::authoring::Geometry| -> Vec<[u32; 3]> {
+            g.indices.chunks(3).map(|t| [t[0], t[1], t[2]]).collect()
+        };
+        let (floor_triangles, cube_triangles) = (triangles(&floor), triangles(&cube));
+        World::build(&[
+            WorldObject {
+                positions: &floor.positions,
+                triangles: &floor_triangles,
+                to_render: Affine3A::IDENTITY,
+                dynamic: false,
+            },
+            WorldObject {
+                positions: &cube.positions,
+                triangles: &cube_triangles,
+                to_render: Affine3A::from_translation(Vec3::new(0.0, 0.5, 0.0)),
+                dynamic: false,
+            },
+        ])
+    }
+
+    #[test]
+    fn nodes_inside_the_box_and_under_the_floor_are_enclosed() {
+        let world = box_on_floor();
+        let reach = 0.8;
+        for inside in [
+            Vec3::new(0.0, 0.5, 0.0),
+            Vec3::new(0.45, 0.03, 0.1),  // at the base, by a side
+            Vec3::new(-0.3, 0.02, -0.4), // near a bottom corner
+            Vec3::new(0.2, 0.97, 0.2),   // under the top
+        ] {
+            assert!(is_enclosed(&world, inside, reach), "{inside}");
+        }
+        assert!(
+            is_enclosed(&world, Vec3::new(1.2, -0.1, 0.3), reach),
+            "below the floor"
+        );
+    }
+
+    #[test]
+    fn nodes_in_the_open_are_not() {
+        let world = box_on_floor();
+        let reach = 0.8;
+        for open in [
+            Vec3::new(0.55, 0.03, 0.1), // just outside the base
+            Vec3::new(0.0, 1.05, 0.0),  // just above the top
+            Vec3::new(1.5, 0.3, 1.5),   // over the floor
+            Vec3::new(0.0, 3.0, 0.0),   // out of reach of everything
+        ] {
+            assert!(!is_enclosed(&world, open, reach), "{open}");
+        }
+    }
+}

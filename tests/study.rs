@@ -1,0 +1,276 @@
+//! `lmanim study` end to end: a tiny study of the box scene writes its four
+//! outputs with the runs the sweep promises, and bad input stops it with
+//! one line and exit code 2; and the study's penumbra is where geometry
+//! puts it.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+mod common;
+
+use common::*;
+use glam::{Vec3, Vec4};
+use lmanim::backend::{Backend, CpuBackend};
+use lmanim::output::{write_exr, ExrPrecision, Image};
+use lmanim::sequence::Sequence;
+use lmanim::settings::{BackendKind, Method, Settings};
+use lmanim::stats::FrameStats;
+use lmanim::study::measure::Reference;
+use lmanim_authoring::study::StudyScene;
+
+fn lmanim(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lmanim"))
+        .args(args)
+        .current_dir(std::env::temp_dir())
+        .output()
+        .expect("the binary runs")
+}
+
+fn box_scene(dir: &Path) -> String {
+    let path = dir.join("box.glb");
+    StudyScene::Box.build().unwrap().write_glb(&path).unwrap();
+    path.display().to_string()
+}
+
+fn text(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+const TINY: [&str; 6] = ["--width", "48", "--height", "27", "--reference-spp", "16"];
+
+#[test]
+fn a_tiny_study_writes_all_four_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = box_scene(dir.path());
+    let out: PathBuf = dir.path().join("study");
+    let mut args = vec!["study", scene.as_str()];
+    args.extend(TINY);
+    args.extend([
+        "--methods",
+        "whitted,lmm1,area",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let output = lmanim(&args);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("[21/21] area 64 spp"),
+        "progress on stderr: {stderr}"
+    );
+
+    let json: serde_json::Value = serde_json::from_str(&text(&out.join("study.json"))).unwrap();
+    let runs = json["runs"].as_array().unwrap();
+    // whitted, lmm1 at the default lattice and 15 swept ones, area at 4 spp.
+    assert_eq!(runs.len(), 1 + 16 + 4);
+    assert_eq!(json["reference"]["spp"], 16);
+    assert!(json["reference"]["penumbra_pixels"].as_u64().unwrap() > 0);
+    for run in runs {
+        assert!(run["seconds"].as_f64().unwrap() > 0.0, "{run}");
+        let rmse = run["rmse"].as_f64().unwrap();
+        assert!((0.0..1.0).contains(&rmse), "{run}");
+    }
+    assert!(runs[0]["h"].is_null() && runs[0]["ki"].is_null());
+    assert_eq!(runs[1]["default_lattice"], true);
+    assert!(
+        runs[1]["h"].as_f64().unwrap() > 0.0,
+        "the default h is reported"
+    );
+    // Area at the reference's own samples renders the reference's pixels.
+    let same = runs
+        .iter()
+        .find(|run| run["method"] == "area" && run["spp"] == 16)
+        .unwrap();
+    assert_eq!(same["rmse"], 0.0);
+    assert_eq!(same["within_1pct"], 1.0);
+    // Whitted's hard edge is wrong in the penumbra.
+    assert!(runs[0]["penumbra_rmse"].as_f64().unwrap() > 0.05);
+    assert!(runs.iter().any(|run| run["pareto"] == true));
+
+    let csv = text(&out.join("study.csv"));
+    assert_eq!(csv.lines().count(), 1 + runs.len());
+    for picture in ["study.png", "crops.png"] {
+        let bytes = std::fs::read(out.join(picture)).unwrap();
+        assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n"), "{picture}");
+        assert!(bytes.len() > 2000, "{picture} has something drawn");
+    }
+    assert!(out.join("reference.exr").is_file());
+}
+
+#[test]
+fn a_given_reference_is_measured_against_with_its_mask() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = box_scene(dir.path());
+    let first = dir.path().join("first");
+    let mut args = vec!["study", scene.as_str(), "--quiet"];
+    args.extend(TINY);
+    args.extend(["--methods", "whitted", "--out", first.to_str().unwrap()]);
+    assert!(lmanim(&args).status.success());
+
+    // The same reference from a file, with its left half masked out.
+    let reference = first.join("reference.exr");
+    let mask = dir.path().join("mask.exr");
+    let mut left = Image::filled(48, 27, Vec4::ZERO);
+    for (i, pixel) in left.pixels.iter_mut().enumerate() {
+        if i % 48 < 24 {
+            *pixel = Vec4::ONE;
+        }
+    }
+    write_exr(&mask, &left, ExrPrecision::Half).unwrap();
+    let second = dir.path().join("second");
+    let output = lmanim(&[
+        "study",
+        &scene,
+        "--quiet",
+        "--width",
+        "48",
+        "--height",
+        "27",
+        "--methods",
+        "whitted",
+        "--reference",
+        reference.to_str().unwrap(),
+        "--reference-mask",
+        mask.to_str().unwrap(),
+        "--out",
+        second.to_str().unwrap(),
+    ]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let json = |dir: &Path| -> serde_json::Value {
+        serde_json::from_str(&text(&dir.join("study.json"))).unwrap()
+    };
+    let (first, second) = (json(&first), json(&second));
+    assert!(second["reference"]["source"]
+        .as_str()
+        .unwrap()
+        .ends_with("reference.exr"));
+    assert!(second["reference"]["estimated_noise"].is_null());
+    let count = |json: &serde_json::Value, key: &str| json["reference"][key].as_u64().unwrap();
+    assert_eq!(count(&first, "masked_pixels"), 0);
+    let masked = count(&second, "masked_pixels");
+    assert!(masked > 0);
+    assert_eq!(
+        count(&first, "lit_pixels") + count(&first, "edge_pixels"),
+        count(&second, "lit_pixels") + count(&second, "edge_pixels") + masked,
+        "the mask takes pixels out of those measured, and only those"
+    );
+}
+
+/// Asserts exit code 2 and one line on stderr holding `needle`.
+fn assert_bad_input(output: &Output, needle: &str) {
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    let lines: Vec<&str> = stderr
+        .lines()
+        .filter(|line| !line.trim().is_empty())
+        .collect();
+    assert_eq!(lines.len(), 1, "one line: {stderr}");
+    assert!(lines[0].contains(needle), "'{needle}' in {stderr}");
+}
+
+#[test]
+fn bad_input_stops_the_study_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = box_scene(dir.path());
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    let study = |extra: &[&str]| {
+        let mut args = vec![
+            "study",
+            scene.as_str(),
+            "--width",
+            "48",
+            "--height",
+            "27",
+            "--quiet",
+        ];
+        args.extend(extra);
+        args.extend(["--out", out]);
+        lmanim(&args)
+    };
+    let missing = dir.path().join("missing.exr");
+    assert_bad_input(
+        &study(&["--reference", missing.to_str().unwrap()]),
+        "missing.exr",
+    );
+    let junk = dir.path().join("junk.exr");
+    std::fs::write(&junk, b"not an exr").unwrap();
+    assert_bad_input(&study(&["--reference", junk.to_str().unwrap()]), "junk.exr");
+    let small = dir.path().join("small.exr");
+    write_exr(&small, &Image::filled(4, 4, Vec4::ONE), ExrPrecision::Float).unwrap();
+    let output = study(&["--reference", small.to_str().unwrap()]);
+    assert_bad_input(&output, "small.exr");
+    assert!(String::from_utf8_lossy(&output.stderr).contains("4x4"));
+    assert_bad_input(&study(&["--reference-spp", "0"]), "--reference-spp");
+    assert_bad_input(
+        &lmanim(&["study", &scene, "--width", "0", "--out", out]),
+        "width",
+    );
+    assert_bad_input(
+        &lmanim(&["study", "/no/such/scene.gltf", "--out", out]),
+        "/no/such/scene.gltf",
+    );
+    assert!(!Path::new(out).join("study.json").exists());
+}
+
+/// A square plate (half-size 0.25 m) 1 m above the floor, under a lamp of
+/// radius 0.2 m 1 m above the plate. Along the floor's central strip,
+/// similar triangles put the umbra within |x| = 0.3 m and full light
+/// beyond 0.7 m (a floor point at x sees the lamp's x' where
+/// (x + x') / 2 ≥ 0.25): the measure's penumbra pixels must lie between,
+/// and fill it two pixels in from each end, where at least 7% and at most
+/// 93% of the lamp shows.
+#[test]
+fn penumbra_pixels_lie_where_similar_triangles_put_the_penumbra() {
+    let mut scene = empty_scene();
+    let grey = add_material(&mut scene, lambert(Vec3::splat(0.5)));
+    add_quads(
+        &mut scene,
+        &[floor_quad(0.0, 3.0), floor_quad(1.0, 0.25)],
+        1,
+        grey,
+    );
+    add_lamp(&mut scene, 20.0, Vec3::new(0.0, 2.0, 0.0), 0.2);
+    add_top_camera(&mut scene, 0.5, 1.0);
+    let (width, height) = (80, 80);
+    let frame = settings(width, height);
+    let mut sequence = Sequence::new(scene, "plate".into()).unwrap();
+    let placed = sequence.place(&frame).unwrap();
+    let mut backend = Backend::new(BackendKind::Cpu, None).unwrap();
+    let area = Settings {
+        method: Method::Area,
+        spp: 1024,
+        ..frame.clone()
+    };
+    let lamp = sequence
+        .render(&mut backend, &placed, &area, &mut FrameStats::default())
+        .unwrap();
+    let cpu = CpuBackend::new(None).unwrap();
+    let unshadowed = sequence.render_unshadowed(&cpu, &placed, &frame, &mut FrameStats::default());
+    let measure = Reference::new(lamp, &unshadowed, &unshadowed, None).unwrap();
+
+    let step = 2.0 / width as f32;
+    let mut inside = 0;
+    for py in 0..height {
+        for px in 0..width {
+            let (x, z) = top_camera_ground(px, py, width, height, 1.0);
+            if z.abs() > 0.2 {
+                continue;
+            }
+            let penumbra = measure.is_penumbra_pixel((py * width + px) as usize);
+            let r = x.abs();
+            if (0.3 + 2.0 * step..0.7 - 2.0 * step).contains(&r) {
+                assert!(penumbra, "x = {x}, z = {z} is in the penumbra");
+                inside += 1;
+            }
+            if r < 0.3 - step || r > 0.7 + step {
+                assert!(!penumbra, "x = {x}, z = {z} is umbra or fully lit");
+            }
+        }
+    }
+    assert!(inside > 100, "{inside} pixels checked inside the penumbra");
+}
