@@ -363,7 +363,7 @@ mod tests {
             let dir = tempfile::tempdir().unwrap();
             let path = dir.path().join(format!("{}.glb", scene.file_stem()));
             builder.write_glb(&path).unwrap();
-            let loaded = crate::import::load(&path).unwrap();
+            let loaded = lmanim::import::load(&path).unwrap();
             assert_eq!(loaded.cameras.len(), 1, "{scene:?}");
             let lamps = loaded.lights.len();
             let expected = if scene == StudyScene::Street { 16 } else { 1 };
