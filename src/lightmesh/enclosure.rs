@@ -153,31 +153,68 @@ mod tests {
 
     use super::*;
     use crate::accel::WorldObject;
-    use crate::authoring::shapes;
 
-    /// A floor (a one-sided plane, 4 m square) and a closed unit box
-    /// resting on it, its bottom face in the floor's plane.
+    /// A floor (a one-sided plane facing +Y, 4 m square) and a closed unit
+    /// box wound outwards, resting on it, its bottom face in the floor's
+    /// plane.
     fn box_on_floor() -> World {
-        let floor = shapes::plane(glam::Vec2::splat(2.0));
-        let cube = shapes::cuboid(Vec3::splat(0.5));
-        let triangles = |g: &crate::authoring::Geometry| -> Vec<[u32; 3]> {
-            g.indices.chunks(3).map(|t| [t[0], t[1], t[2]]).collect()
-        };
-        let (floor_triangles, cube_triangles) = (triangles(&floor), triangles(&cube));
+        let floor = [-2.0f32, 2.0].map(|x| [-2.0f32, 2.0].map(|z| Vec3::new(x, 0.0, z)));
+        let floor_positions = [floor[0][0], floor[1][0], floor[1][1], floor[0][1]];
+        let floor_triangles = [[0, 2, 1], [0, 3, 2]];
+        let cube_positions: Vec<Vec3> = unit_cube_corners()
+            .into_iter()
+            .map(|corner| corner - Vec3::splat(0.5))
+            .collect();
         World::build(&[
             WorldObject {
-                positions: &floor.positions,
+                positions: &floor_positions,
                 triangles: &floor_triangles,
                 to_render: Affine3A::IDENTITY,
                 dynamic: false,
             },
             WorldObject {
-                positions: &cube.positions,
-                triangles: &cube_triangles,
+                positions: &cube_positions,
+                triangles: &CUBE_TRIANGLES,
                 to_render: Affine3A::from_translation(Vec3::new(0.0, 0.5, 0.0)),
                 dynamic: false,
             },
         ])
+    }
+
+    /// The unit cube's triangles over [`unit_cube_corners`], two a face.
+    const CUBE_TRIANGLES: [[u32; 3]; 12] = [
+        [0, 4, 6],
+        [0, 6, 2],
+        [1, 3, 7],
+        [1, 7, 5],
+        [0, 1, 5],
+        [0, 5, 4],
+        [2, 6, 7],
+        [2, 7, 3],
+        [0, 2, 3],
+        [0, 3, 1],
+        [4, 5, 7],
+        [4, 7, 6],
+    ];
+
+    /// Corner i of the unit cube has x, y, z from its bits 0, 1, 2.
+    fn unit_cube_corners() -> Vec<Vec3> {
+        (0..8)
+            .map(|i| Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32))
+            .collect()
+    }
+
+    /// Every triangle of the test box faces out, which the probes'
+    /// back-or-front count relies on.
+    #[test]
+    fn the_test_box_is_wound_outwards() {
+        let corners = unit_cube_corners();
+        let centre = Vec3::splat(0.5);
+        for triangle in CUBE_TRIANGLES {
+            let [a, b, c] = triangle.map(|i| corners[i as usize]);
+            let normal = (b - a).cross(c - a);
+            assert!(normal.dot((a + b + c) / 3.0 - centre) > 0.0, "{triangle:?}");
+        }
     }
 
     #[test]
