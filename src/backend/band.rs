@@ -1,7 +1,8 @@
 //! What both backends do the same way around their stages: splitting the
 //! image into bands of whole tile rows, so memory stays bounded at any
-//! resolution and sample count, and the resolve stage that turns a band's
-//! shaded points into pixels.
+//! resolution and sample count; and the resolve stage that turns a band's
+//! shaded points into pixels, which the GPU's film (`accumulate.wgsl`,
+//! `resolve.wgsl`) repeats sum for sum.
 
 use std::ops::Range;
 
