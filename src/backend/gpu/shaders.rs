@@ -66,6 +66,7 @@ const COMMON: &str = include_str!("shaders/common.wgsl");
 const VECTOR: &str = include_str!("shaders/vector.wgsl");
 const PATH: &str = include_str!("shaders/path.wgsl");
 const SURFACE_POINT: &str = include_str!("shaders/surface_point.wgsl");
+const SCHLICK: &str = include_str!("shaders/schlick.wgsl");
 /// What the passes that trace share: the world and its traversal.
 const TRACING: [&str; 3] = [
     include_str!("shaders/scene.wgsl"),
@@ -103,6 +104,7 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
             &[
                 VECTOR,
                 SURFACE_POINT,
+                SCHLICK,
                 include_str!("shaders/direct_light.wgsl"),
             ],
         ),
@@ -112,6 +114,7 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
                 VECTOR,
                 PATH,
                 SURFACE_POINT,
+                SCHLICK,
                 include_str!("shaders/scatter.wgsl"),
             ],
         ),
@@ -120,7 +123,11 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
         Entry::Compact => (&[], &[PATH, include_str!("shaders/compact.wgsl")]),
         Entry::Accumulate => (
             &[],
-            &[SURFACE_POINT, include_str!("shaders/accumulate.wgsl")],
+            &[
+                VECTOR,
+                SURFACE_POINT,
+                include_str!("shaders/accumulate.wgsl"),
+            ],
         ),
         Entry::Resolve => (&[], &[include_str!("shaders/resolve.wgsl")]),
     };

@@ -40,10 +40,7 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         let light = direct[i];
         let shaded = point.emissive + light.radiance;
-        value = vec4<f32>(
-            value.xyz + vec3<f32>(mul(point.weight.x, shaded.x), mul(point.weight.y, shaded.y), mul(point.weight.z, shaded.z)),
-            select(value.w, 1.0, point.depth == 0u),
-        );
+        value = vec4<f32>(value.xyz + mul3(point.weight, shaded), select(value.w, 1.0, point.depth == 0u));
         hits += 1u;
         shadow_rays += light.shadow_rays;
     }

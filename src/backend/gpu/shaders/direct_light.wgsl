@@ -105,9 +105,8 @@ fn brdf(point: ShadePoint, l: vec3<f32>) -> vec3<f32> {
     let sum = ggx_v + ggx_l;
     let visibility = select(0.0, div(0.5, sum), sum > 0.0);
     let specular = mul(distribution, visibility);
-    let complement = 1.0 - v_dot_h;
-    let squared = mul(complement, complement);
-    let fresnel = mul(mul(squared, squared), complement);
+    // v·h is in [0, 1] already: the weight's clamp changes nothing.
+    let fresnel = schlick_weight(v_dot_h);
 
     let f0 = point.dielectric_f0;
     let dielectric_fresnel = f0 + mul(point.specular - f0, fresnel);

@@ -10,12 +10,6 @@
 // Below it a surface is a mirror (`material.rs`'s `MIRROR_ROUGHNESS`).
 const MIRROR_ROUGHNESS: f32 = 0.1;
 
-fn schlick_weight(cos_theta: f32) -> f32 {
-    let complement = 1.0 - unit_clamp(cos_theta);
-    let squared = mul(complement, complement);
-    return mul(mul(squared, squared), complement);
-}
-
 // `brdf::mirror_reflectance`.
 fn mirror_reflectance(point: SurfacePoint, cos_theta: f32) -> vec3<f32> {
     let fresnel = schlick_weight(cos_theta);
@@ -41,10 +35,6 @@ fn dielectric_fresnel(cos_i: f32, eta: f32) -> f32 {
         cos = root(1.0 - sin2_t);
     }
     return f0 + mul(1.0 - f0, schlick_weight(cos));
-}
-
-fn mul3(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(mul(a.x, b.x), mul(a.y, b.y), mul(a.z, b.z));
 }
 
 fn path_ray(origin: vec3<f32>, direction: vec3<f32>, point: SurfacePoint, weight: vec3<f32>) -> PathRay {

@@ -164,10 +164,6 @@ fn sample(index: u32, uv: vec2<f32>) -> vec4<f32> {
     return lerp4(top, bottom, fy);
 }
 
-fn mul3(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(mul(a.x, b.x), mul(a.y, b.y), mul(a.z, b.z));
-}
-
 // The surface point of a ray's closest hit: `ShadingPoint::from_hit`.
 fn surface_point(ray: PathRay, hit: HitRecord) -> SurfacePoint {
     var point: SurfacePoint;

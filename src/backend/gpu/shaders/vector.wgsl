@@ -22,6 +22,11 @@ fn scale3(v: vec3<f32>, s: f32) -> vec3<f32> {
     return vec3<f32>(mul(v.x, s), mul(v.y, s), mul(v.z, s));
 }
 
+// `Vec3 * Vec3`, component by component.
+fn mul3(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(mul(a.x, b.x), mul(a.y, b.y), mul(a.z, b.z));
+}
+
 // `f32::clamp` to [0, 1]: NaN stays NaN, as on the CPU.
 fn unit_clamp(x: f32) -> f32 {
     return select(select(x, 1.0, x > 1.0), 0.0, x < 0.0);
