@@ -519,12 +519,8 @@ fn agreeing_share(a: &Image, b: &Image) -> f64 {
 /// of pixels within 1e-3, and the same bits where the adapter has f64 (the
 /// queries then answer alike, and everything else is the same code).
 fn assert_backends_agree(scene: &Path, frames: &str, args: &[&str]) {
-    let Some(mut gpu) = gpu() else { return };
-    let exact = gpu
-        .passes_for(&World::build(&[]))
-        .expect("context")
-        .context
-        .exact;
+    let Some(gpu) = gpu() else { return };
+    let exact = gpu.rounds_as_the_cpu();
     let dir = tempfile::tempdir().expect("tempdir");
     let cpu_frames = render(dir.path(), scene, "cpu", frames, args);
     let gpu_frames = render(dir.path(), scene, "gpu", frames, args);
@@ -698,11 +694,7 @@ fn camera_and_secondary_rays(
 #[test]
 fn shading_points_made_on_the_gpu_are_the_cpus() {
     let Some(mut gpu) = gpu() else { return };
-    let exact = gpu
-        .passes_for(&World::build(&[]))
-        .expect("context")
-        .context
-        .exact;
+    let exact = gpu.rounds_as_the_cpu();
     let dir = tempfile::tempdir().expect("tempdir");
     let scenes = [
         (sample("courtyard.gltf"), vec![0.0, 0.5]),

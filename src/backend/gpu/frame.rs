@@ -177,9 +177,7 @@ impl Frame<'_> {
         let context = self.context;
         let mut points = Vec::with_capacity(rays.len());
         for batch in rays.chunks(BATCH) {
-            let paths: Vec<PathRay> = (batch.iter())
-                .map(|ray| PathRay::new(ray, 0, Vec3::ONE, 0))
-                .collect();
+            let paths: Vec<PathRay> = batch.iter().map(PathRay::from).collect();
             let records: Vec<SurfacePoint> = context.checked("making shading points", || {
                 let level = LevelBuffers::new(context, &paths)?;
                 let mut encoder = context.device.create_command_encoder(&Default::default());

@@ -102,6 +102,12 @@ impl GpuBackend {
         self.pool.current_num_threads()
     }
 
+    /// Whether the adapter rounds as the CPU does (it has f64): then every
+    /// answer and frame is the CPU backend's to the bit.
+    pub fn rounds_as_the_cpu(&self) -> bool {
+        self.context.exact
+    }
+
     /// The adapter's name, backend and driver, for the user.
     pub fn adapter(&self) -> String {
         self.context.to_string()

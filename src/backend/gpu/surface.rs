@@ -52,6 +52,14 @@ pub struct PathRay {
     depth: u32,
 }
 
+impl From<&Ray> for PathRay {
+    /// `ray` as a camera ray of sample 0: a path of its own, for queries
+    /// outside a frame.
+    fn from(ray: &Ray) -> PathRay {
+        PathRay::new(ray, 0, Vec3::ONE, 0)
+    }
+}
+
 impl PathRay {
     pub fn new(ray: &Ray, sample: u32, weight: Vec3, depth: u32) -> PathRay {
         PathRay {
@@ -293,7 +301,6 @@ pub struct FrameSurfaces {
 }
 
 /// The parts of a [`FrameScene`] the shading-point pass reads.
-#[derive(PartialEq)]
 struct Placement {
     objects: Vec<PlacedObject>,
     materials: Vec<Material>,
@@ -308,6 +315,14 @@ impl Placement {
             deformed: frame.deformed.clone(),
         }
     }
+
+    /// Whether `frame` places everything as this does; compared in place,
+    /// so a still frame copies nothing.
+    fn holds(&self, frame: &FrameScene) -> bool {
+        self.objects == frame.objects
+            && self.materials == frame.materials
+            && self.deformed == frame.deformed
+    }
 }
 
 impl FrameSurfaces {
@@ -318,16 +333,18 @@ impl FrameSurfaces {
         context: &GpuContext,
         frame: &FrameScene,
     ) -> Result<&'s FrameSurfaces, GpuError> {
-        let placed = Placement::of(frame);
         if surfaces
             .as_ref()
-            .is_some_and(|current| current.placed != placed)
+            .is_some_and(|current| !current.placed.holds(frame))
         {
             *surfaces = None;
         }
         match surfaces {
             Some(current) => Ok(current),
-            None => Ok(surfaces.insert(FrameSurfaces::upload(context, placed)?)),
+            None => {
+                let placed = Placement::of(frame);
+                Ok(surfaces.insert(FrameSurfaces::upload(context, placed)?))
+            }
         }
     }
 

@@ -5,7 +5,7 @@
 //! for the shading-point pass.
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 
 use super::context::{GpuContext, GpuError};
 use super::pass::{Dispatch, WorldPass, WorldUse, BATCH, ITEMS};
@@ -86,9 +86,7 @@ impl RayQueries {
     ) -> Result<Vec<Option<Hit>>, GpuError> {
         let mut records: Vec<HitRecord> = Vec::with_capacity(rays.len());
         for batch in rays.chunks(BATCH) {
-            let paths: Vec<PathRay> = (batch.iter())
-                .map(|ray| PathRay::new(ray, 0, Vec3::ONE, 0))
-                .collect();
+            let paths: Vec<PathRay> = batch.iter().map(PathRay::from).collect();
             records.extend(self.closest.run::<PathRay, HitRecord>(
                 context,
                 scene,
