@@ -8,7 +8,7 @@ use std::path::Path;
 
 use glam::Vec4;
 
-use super::label::{draw_label, Canvas};
+use super::label::{draw_label, label_font, Canvas};
 use super::png::{preview_bytes, write_rgba8};
 use super::{Image, OutputError};
 
@@ -86,9 +86,12 @@ impl ContactSheet {
         let size = self
             .cell
             .map_or(0.0, |(_, height)| (height as f32 / 6.0).max(9.0));
-        for (index, (frame, _)) in self.thumbnails.iter().enumerate() {
-            let (left, top) = self.corner(index);
-            draw_label(&mut canvas, left + 2, top + 2, &frame.to_string(), size);
+        if let Some(font) = label_font() {
+            for (index, (frame, _)) in self.thumbnails.iter().enumerate() {
+                let (left, top) = self.corner(index);
+                let corner = (left + 2, top + 2);
+                draw_label(&mut canvas, &font, corner, &frame.to_string(), size);
+            }
         }
         write_rgba8(path, sheet.width, sheet.height, &bytes)
     }

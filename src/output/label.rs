@@ -33,12 +33,20 @@ impl Canvas<'_> {
     }
 }
 
-/// Draws `text` `size` pixels high with its box's top-left corner at
-/// (`left`, `top`), clipped to the canvas.
-pub fn draw_label(canvas: &mut Canvas, left: u32, top: u32, text: &str, size: f32) {
-    let Ok(font) = FontRef::try_from_slice(FONT) else {
-        return;
-    };
+/// The embedded font, parsed; None only if the file embedded is broken.
+pub fn label_font() -> Option<FontRef<'static>> {
+    FontRef::try_from_slice(FONT).ok()
+}
+
+/// Draws `text` in `font`, `size` pixels high, with its box's top-left
+/// corner at (`left`, `top`), clipped to the canvas.
+pub fn draw_label(
+    canvas: &mut Canvas,
+    font: &FontRef,
+    (left, top): (u32, u32),
+    text: &str,
+    size: f32,
+) {
     let scale = PxScale::from(size);
     let scaled = font.as_scaled(scale);
     let padding = (size / 6.0).ceil();
