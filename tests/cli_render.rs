@@ -2,21 +2,15 @@
 //! JSON, exit codes and one-line errors for bad usage.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use glam::{Vec2, Vec3};
 use lmanim::scene::{Light, LightKind, Material};
 use lmanim_authoring::{shapes, GltfBuilder, NodeDesc, Primitive};
 
-/// Runs the binary outside the repository, so that its default light-mesh
-/// cache (`cache/` in the current directory) never lands in the tree.
-fn lmanim(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lmanim"))
-        .args(args)
-        .current_dir(std::env::temp_dir())
-        .output()
-        .expect("the binary runs")
-}
+mod common;
+
+use common::cli::{assert_bad_input, lmanim};
 
 fn courtyard() -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -27,18 +21,6 @@ fn courtyard() -> String {
 
 fn stderr(output: &Output) -> String {
     String::from_utf8_lossy(&output.stderr).into_owned()
-}
-
-/// Asserts a bad-usage failure: exit code 2 and one line naming `needle`.
-fn assert_bad_usage(output: &Output, needle: &str) {
-    let text = stderr(output);
-    assert_eq!(output.status.code(), Some(2), "{text}");
-    let lines: Vec<&str> = text
-        .lines()
-        .filter(|line| !line.trim().is_empty())
-        .collect();
-    assert_eq!(lines.len(), 1, "one line: {text}");
-    assert!(lines[0].contains(needle), "'{needle}' in {text}");
 }
 
 #[test]
@@ -153,26 +135,26 @@ fn light_mesh_methods_report_h_and_their_statistics() {
 #[test]
 fn bad_usage_exits_2_with_one_line() {
     let scene = courtyard();
-    assert_bad_usage(
+    assert_bad_input(
         &lmanim(&[&scene, "--frames", "5..5", "--out", "/tmp/x.#.exr"]),
         "--frames",
     );
-    assert_bad_usage(&lmanim(&[&scene, "--width", "0"]), "width");
-    assert_bad_usage(
+    assert_bad_input(&lmanim(&[&scene, "--width", "0"]), "width");
+    assert_bad_input(
         &lmanim(&[&scene, "--camera", "nope", "--out", "/tmp/x.#.exr"]),
         "main",
     );
-    assert_bad_usage(
+    assert_bad_input(
         &lmanim(&[&scene, "--frames", "0..2", "--out", "/tmp/single.exr"]),
         "#",
     );
-    assert_bad_usage(&lmanim(&["/no/such/scene.gltf"]), "/no/such/scene.gltf");
-    assert_bad_usage(
+    assert_bad_input(&lmanim(&["/no/such/scene.gltf"]), "/no/such/scene.gltf");
+    assert_bad_input(
         &lmanim(&[&scene, "--clip", "Nope", "--out", "/tmp/x.#.exr"]),
         "--clip",
     );
-    assert_bad_usage(&lmanim(&[&scene, "--h", "-1"]), "--h -1");
-    assert_bad_usage(&lmanim(&[&scene, "--ki", "9"]), "--ki 9");
+    assert_bad_input(&lmanim(&[&scene, "--h", "-1"]), "--h -1");
+    assert_bad_input(&lmanim(&[&scene, "--ki", "9"]), "--ki 9");
     // Clap's own usage errors keep its exit code 2 (several lines of help).
     assert_eq!(lmanim(&[&scene, "--spp", "many"]).status.code(), Some(2));
 }
@@ -214,7 +196,7 @@ fn a_bad_settings_file_is_named_with_its_line() {
     let settings = dir.path().join("bad.ron");
     std::fs::write(&settings, "(\n  width: 64,\n  colour: true,\n)\n").unwrap();
     let output = lmanim(&[&courtyard(), "--settings", settings.to_str().unwrap()]);
-    assert_bad_usage(&output, "bad.ron:3");
+    assert_bad_input(&output, "bad.ron:3");
 }
 
 #[test]
@@ -334,6 +316,6 @@ fn a_contact_sheet_shows_the_runs_frames() {
 
     for (flag, value) in [("--sheet-columns", "0"), ("--sheet-every", "0")] {
         let output = lmanim(&[&courtyard(), "--contact-sheet", "x.png", flag, value]);
-        assert_bad_usage(&output, &flag[2..].replace('-', "_"));
+        assert_bad_input(&output, &flag[2..].replace('-', "_"));
     }
 }

@@ -4,10 +4,10 @@
 //! puts it.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 mod common;
 
+use common::cli::{assert_bad_input, lmanim};
 use common::*;
 use glam::{Vec3, Vec4};
 use lmanim::backend::{Backend, CpuBackend};
@@ -17,14 +17,6 @@ use lmanim::settings::{BackendKind, Method, Settings};
 use lmanim::stats::FrameStats;
 use lmanim::study::measure::Reference;
 use lmanim_authoring::study::StudyScene;
-
-fn lmanim(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lmanim"))
-        .args(args)
-        .current_dir(std::env::temp_dir())
-        .output()
-        .expect("the binary runs")
-}
 
 fn box_scene(dir: &Path) -> String {
     let path = dir.join("box.glb");
@@ -158,18 +150,6 @@ fn a_given_reference_is_measured_against_with_its_mask() {
         count(&second, "lit_pixels") + count(&second, "edge_pixels") + masked,
         "the mask takes pixels out of those measured, and only those"
     );
-}
-
-/// Asserts exit code 2 and one line on stderr holding `needle`.
-fn assert_bad_input(output: &Output, needle: &str) {
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(2), "{stderr}");
-    let lines: Vec<&str> = stderr
-        .lines()
-        .filter(|line| !line.trim().is_empty())
-        .collect();
-    assert_eq!(lines.len(), 1, "one line: {stderr}");
-    assert!(lines[0].contains(needle), "'{needle}' in {stderr}");
 }
 
 #[test]

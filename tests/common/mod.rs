@@ -1,6 +1,9 @@
 //! Scenes built in memory for the renderer's tests: quads, lights and
-//! cameras as plain `SceneDesc` data, so each test states its geometry.
+//! cameras as plain `SceneDesc` data, so each test states its geometry;
+//! and ([`cli`]) running the binary and what its tests assert of failures.
 #![allow(dead_code)] // each test file uses its own subset
+
+pub mod cli;
 
 use glam::{DMat4, DQuat, DVec3, Vec3, Vec4};
 use lmanim::output::Image;
