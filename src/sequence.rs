@@ -313,6 +313,7 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
         ));
     }
     let mut backend = Backend::new(settings.backend, settings.threads)?;
+    backend.limit_mask_memory(settings.lightmesh.gpu_memory_mib.saturating_mul(1 << 20));
     let mut sequence = Sequence::load(job.scene_path)?;
     sequence.set_cache_dir(settings.cache_dir.as_ref().map(PathBuf::from));
     if let Some(clip) = &settings.clip {

@@ -179,6 +179,10 @@ pub struct LightMeshSettings {
     /// Memory the node masks may take, in MiB; a frame that would need
     /// more is refused with a clear error instead of exhausting memory.
     pub max_memory_mib: usize,
+    /// GPU memory the resident masks may take, in MiB (`--backend gpu`):
+    /// bricks no level reads are evicted first, and a level that reads
+    /// more is refused with the same clear error.
+    pub gpu_memory_mib: usize,
 }
 
 impl Default for LightMeshSettings {
@@ -187,6 +191,7 @@ impl Default for LightMeshSettings {
             h: None,
             ki: 2.5,
             max_memory_mib: 4096,
+            gpu_memory_mib: 1024,
         }
     }
 }
@@ -293,16 +298,13 @@ impl Settings {
         if self.sheet_every == 0 {
             return Err("sheet_every is 0; it must be at least 1".into());
         }
-        if self.backend == BackendKind::Gpu && self.method.uses_light_mesh() {
-            return Err(format!(
-                "method {} runs on backend cpu only: backend gpu renders whitted and area",
-                self.method
-            ));
-        }
         if self.threads == Some(0) {
             return Err("threads is 0; leave it out to use every core".into());
         }
         let lightmesh = &self.lightmesh;
+        if lightmesh.gpu_memory_mib == 0 {
+            return Err("lightmesh.gpu_memory_mib is 0; it must be at least 1".into());
+        }
         if let Some(fault) = LightMeshSettings::ki_fault(lightmesh.ki) {
             return Err(format!("lightmesh.ki is {}; {fault}", lightmesh.ki));
         }

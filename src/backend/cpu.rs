@@ -74,17 +74,7 @@ impl CpuBackend {
             Ok::<_, RenderError>(shaded)
         })?;
         if let (true, Some(mesh)) = (method.uses_light_mesh(), light_mesh) {
-            let points = stats.shading_points.max(1) as f64;
-            stats.lightmesh = Some(LightMeshStats {
-                h: mesh.lattice.h,
-                ki: mesh.ki,
-                mean_candidates: counts.candidates as f64 / points,
-                mean_interp_set: counts.interp_set as f64 / points,
-                mean_p2n_tests: counts.p2n_tests as f64 / points,
-                fallback_points: counts.fallback,
-                bits_cached: mesh.masks().known_bits(),
-                ..lightmesh
-            });
+            stats.lightmesh = Some(mesh.frame_stats(lightmesh, counts, stats.shading_points));
         }
         Ok(image)
     }

@@ -70,6 +70,14 @@ impl Backend {
         }
     }
 
+    /// Bounds the GPU memory the light mesh's resident masks may take; the
+    /// CPU backend keeps its masks in the light mesh alone.
+    pub fn limit_mask_memory(&mut self, bytes: usize) {
+        if let Backend::Gpu(gpu) = self {
+            gpu.limit_mask_memory(bytes);
+        }
+    }
+
     /// The adapter a GPU backend runs on, for the user; None on the CPU.
     pub fn adapter(&self) -> Option<String> {
         match self {
@@ -91,7 +99,7 @@ impl Backend {
     ) -> Result<Image, RenderError> {
         match self {
             Backend::Cpu(cpu) => cpu.render(job, method, light_mesh, stats),
-            Backend::Gpu(gpu) => gpu.render(job, method, stats),
+            Backend::Gpu(gpu) => gpu.render(job, method, light_mesh, stats),
         }
     }
 }

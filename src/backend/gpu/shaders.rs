@@ -12,7 +12,7 @@ pub enum Arithmetic {
 }
 
 /// The compute entry points: camera rays, the two ray queries, shading
-/// points, formula (1), the Whitted recursion's rays and their
+/// points, formula (1), formula (2), the Whitted recursion's rays and their
 /// compaction, and the film.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Entry {
@@ -21,6 +21,7 @@ pub enum Entry {
     AnyHit,
     Surface,
     DirectLight,
+    LightMesh,
     Scatter,
     ScanBlocks,
     ScanSums,
@@ -31,12 +32,13 @@ pub enum Entry {
 
 impl Entry {
     #[cfg(test)]
-    pub const ALL: [Entry; 11] = [
+    pub const ALL: [Entry; 12] = [
         Entry::CameraRays,
         Entry::ClosestHit,
         Entry::AnyHit,
         Entry::Surface,
         Entry::DirectLight,
+        Entry::LightMesh,
         Entry::Scatter,
         Entry::ScanBlocks,
         Entry::ScanSums,
@@ -52,6 +54,7 @@ impl Entry {
             Entry::AnyHit => "any_hit",
             Entry::Surface => "surface",
             Entry::DirectLight => "direct_light",
+            Entry::LightMesh => "light_mesh",
             Entry::Scatter => "scatter",
             Entry::ScanBlocks => "scan_blocks",
             Entry::ScanSums => "scan_sums",
@@ -67,6 +70,22 @@ const VECTOR: &str = include_str!("shaders/vector.wgsl");
 const PATH: &str = include_str!("shaders/path.wgsl");
 const SURFACE_POINT: &str = include_str!("shaders/surface_point.wgsl");
 const SCHLICK: &str = include_str!("shaders/schlick.wgsl");
+const FORMULA_ONE: &str = include_str!("shaders/formula_one.wgsl");
+/// Formula (1)'s pass, and formula (2)'s, which falls back to formula (1).
+const DIRECT_LIGHT: [&str; 5] = [
+    VECTOR,
+    SURFACE_POINT,
+    SCHLICK,
+    FORMULA_ONE,
+    include_str!("shaders/direct_light.wgsl"),
+];
+const LIGHT_MESH: [&str; 5] = [
+    VECTOR,
+    SURFACE_POINT,
+    SCHLICK,
+    FORMULA_ONE,
+    include_str!("shaders/light_mesh.wgsl"),
+];
 /// What the passes that trace share: the world and its traversal.
 const TRACING: [&str; 3] = [
     include_str!("shaders/scene.wgsl"),
@@ -99,15 +118,8 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
                 include_str!("shaders/surface.wgsl"),
             ],
         ),
-        Entry::DirectLight => (
-            &TRACING,
-            &[
-                VECTOR,
-                SURFACE_POINT,
-                SCHLICK,
-                include_str!("shaders/direct_light.wgsl"),
-            ],
-        ),
+        Entry::DirectLight => (&TRACING, &DIRECT_LIGHT),
+        Entry::LightMesh => (&TRACING, &LIGHT_MESH),
         Entry::Scatter => (
             &[],
             &[
@@ -172,6 +184,7 @@ mod tests {
         use crate::accel::flat::{FlatBinaryNode, FlatInstance, FlatWideNode};
         use crate::backend::gpu::camera::CameraRecord;
         use crate::backend::gpu::direct::{DirectLight, FlatLight};
+        use crate::backend::gpu::mask_pool::MeshHeader;
         use crate::backend::gpu::scene::Params;
         use crate::backend::gpu::surface::{
             MaterialRecord, MeshRecord, ObjectRecord, PathRay, SurfacePoint, TextureRecord,
@@ -248,6 +261,11 @@ mod tests {
                 vec![0, 12, 16, 28, 32, 44, 48, 52],
             ),
             ("DirectLight", size_of::<DirectLight>(), vec![0, 12]),
+            (
+                "MeshHeader",
+                size_of::<MeshHeader>(),
+                vec![0, 12, 16, 20, 24, 28],
+            ),
         ];
         for (name, size, offsets) in expected {
             let (module, handle, ty) = modules
