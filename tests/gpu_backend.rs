@@ -38,22 +38,11 @@ use lmanim::scene::{Light, LightKind};
 use lmanim::schedule::FrameDelta;
 use lmanim::sequence::Sequence;
 use lmanim::settings::Settings;
+use lmanim_authoring::city::{city_block, CityParams};
 
 use anim_support::lmanim;
 use common::cube;
-
-/// The GPU backend, or None (with the reason on stderr) off CI when no
-/// adapter exists.
-fn gpu() -> Option<GpuBackend> {
-    match GpuBackend::new(Some(2)) {
-        Ok(gpu) => Some(gpu),
-        Err(error) if std::env::var_os("CI").is_none() => {
-            eprintln!("skipped: {error}");
-            None
-        }
-        Err(error) => panic!("CI must have a GPU adapter (mesa-vulkan-drivers): {error}"),
-    }
-}
+use common::gpu::backend as gpu;
 
 /// Rays from `origins` at every vertex and edge midpoint of the placed
 /// mesh (ties on shared edges and vertices by construction), and the same
@@ -838,4 +827,27 @@ fn light_mesh_methods_on_the_gpu_are_refused_before_any_work() {
     );
     assert_eq!(run.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&run.stderr).contains("backend cpu only"));
+}
+
+/// A city block with 64 street lamps (two words of lights per node mask)
+/// and cars in the dynamic layer, over two frames (the second reuses the
+/// first's masks): LMM1 and LMM frames on the GPU, shaded by formula (2)
+/// from its resident mask pool, are the CPU's.
+#[test]
+fn city_light_mesh_frames_with_64_lamps_match_the_cpu() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let city = dir.path().join("city64.glb");
+    let params = CityParams {
+        blocks: 4,
+        lamps: 64,
+        cars: 3,
+        ..CityParams::default()
+    };
+    city_block(&params)
+        .and_then(|builder| builder.write_glb(&city))
+        .expect("city");
+    for method in ["lmm1", "lmm"] {
+        let args = ["--method", method, "--width", "96", "--height", "54"];
+        assert_backends_agree(&city, "0..2", &args);
+    }
 }

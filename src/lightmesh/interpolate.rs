@@ -78,7 +78,12 @@ impl LightMesh {
     /// A frame's light-mesh statistics: what demand, fill and enclosure
     /// did (`work`), what shading its `points` shading points cost
     /// (`counts`), and what the store holds after it.
-    pub fn frame_stats(&self, work: LightMeshStats, counts: PointCounts, points: u64) -> LightMeshStats {
+    pub fn frame_stats(
+        &self,
+        work: LightMeshStats,
+        counts: PointCounts,
+        points: u64,
+    ) -> LightMeshStats {
         let points = points.max(1) as f64;
         LightMeshStats {
             h: self.lattice.h,

@@ -1,9 +1,11 @@
 //! Scenes built in memory for the renderer's tests: quads, lights and
 //! cameras as plain `SceneDesc` data, so each test states its geometry;
-//! and ([`cli`]) running the binary and what its tests assert of failures.
+//! and ([`cli`]) running the binary and what its tests assert of failures;
+//! ([`gpu`]) the GPU backend where tests have one.
 #![allow(dead_code)] // each test file uses its own subset
 
 pub mod cli;
+pub mod gpu;
 
 use glam::{DMat4, DQuat, DVec3, Vec3, Vec4};
 use lmanim::output::Image;

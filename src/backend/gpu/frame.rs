@@ -24,8 +24,8 @@ use super::surface::{FrameSurfaces, LevelBuffers, PathRay, SceneSurfaces, Surfac
 use super::Pipelines;
 use crate::accel::Ray;
 use crate::backend::sampling::lamp_sample;
-use crate::render::surface::ShadingPoint;
 use crate::backend::RenderError;
+use crate::render::surface::ShadingPoint;
 use crate::render::{area, FrameJob};
 use crate::stats::FrameStats;
 
@@ -40,7 +40,7 @@ pub enum DirectMethod<'m> {
     /// Lamp samples made on the CPU, their segments tested on the GPU.
     Area,
     /// Formula (2), on the GPU, from masks the CPU keeps valid.
-    LightMesh(LightMeshShading<'m>),
+    LightMesh(Box<LightMeshShading<'m>>),
 }
 
 /// One frame's view of the backend, with the frame's uploads.

@@ -164,11 +164,7 @@ impl<'m> LightMeshShading<'m> {
 
     /// The frame's light-mesh statistics, once its `shading_points` are
     /// shaded; the fill's node-to-light segments go to the shadow rays.
-    pub fn finish(
-        self,
-        context: &GpuContext,
-        stats: &mut FrameStats,
-    ) -> Result<(), RenderError> {
+    pub fn finish(self, context: &GpuContext, stats: &mut FrameStats) -> Result<(), RenderError> {
         let encoder = context.device.create_command_encoder(&Default::default());
         let [counts]: [[u32; 8]; 1] = read_back(context, encoder, &self.counts, 1)?
             .try_into()
@@ -182,7 +178,10 @@ impl<'m> LightMeshShading<'m> {
             shadow_rays: 0,
         };
         stats.rays.shadow += self.work.fill_segments;
-        stats.lightmesh = Some(self.mesh.frame_stats(self.work, counts, stats.shading_points));
+        stats.lightmesh = Some(
+            self.mesh
+                .frame_stats(self.work, counts, stats.shading_points),
+        );
         Ok(())
     }
 }

@@ -28,8 +28,8 @@ use rustc_hash::FxHashMap;
 
 use super::context::{GpuContext, GpuError};
 use super::scene::storage;
-use crate::lightmesh::masks::{BrickEnclosure, MaskStore, BRICK_NODES, BRICK_WORDS};
 use crate::backend::RenderError;
+use crate::lightmesh::masks::{BrickEnclosure, MaskStore, BRICK_NODES, BRICK_WORDS};
 use crate::lightmesh::{LightMesh, LightMeshError};
 
 /// Words (u64) of node masks per node: the store's four groups.
@@ -238,7 +238,11 @@ impl MaskPool {
             return 0;
         }
         let mut idle: Vec<(u64, [i32; 3])> = (self.resident.iter())
-            .filter(|(brick, _)| reading.binary_search_by_key(&brick.to_array(), |b| b.to_array()).is_err())
+            .filter(|(brick, _)| {
+                reading
+                    .binary_search_by_key(&brick.to_array(), |b| b.to_array())
+                    .is_err()
+            })
             .map(|(brick, resident)| (resident.used, brick.to_array()))
             .collect();
         idle.sort_unstable();
@@ -270,7 +274,11 @@ impl MaskPool {
 
     /// Rebuilds and uploads the directory where the resident set or the
     /// header changed.
-    fn build_directory(&mut self, context: &GpuContext, header: MeshHeader) -> Result<(), GpuError> {
+    fn build_directory(
+        &mut self,
+        context: &GpuContext,
+        header: MeshHeader,
+    ) -> Result<(), GpuError> {
         let entries = (2 * self.resident.len()).next_power_of_two().max(16);
         let header = MeshHeader {
             entry_mask: entries as u32 - 1,

@@ -215,13 +215,13 @@ impl GpuBackend {
             (Method::Whitted, _) => DirectMethod::Whitted,
             (Method::Area, _) => DirectMethod::Area,
             (Method::Lmm | Method::Lmm1, Some(mesh)) => {
-                DirectMethod::LightMesh(LightMeshShading::new(
+                DirectMethod::LightMesh(Box::new(LightMeshShading::new(
                     &self.context,
                     mesh,
                     &mut pool,
                     method.tests_point_to_node(),
                     job,
-                )?)
+                )?))
             }
             (Method::Lmm | Method::Lmm1, None) => return Err(RenderError::NoLightMesh(method)),
         };
