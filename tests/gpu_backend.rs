@@ -22,8 +22,10 @@ use std::path::Path;
 
 use glam::{Affine3A, DMat4, DQuat, DVec3, Quat, Vec2, Vec3};
 use lmanim::accel::{Hit, Ray, World, WorldObject};
+use lmanim::backend::gpu::mask_pool::MaskPool;
 use lmanim::backend::gpu::{FrameLights, GpuError};
-use lmanim::backend::GpuBackend;
+use lmanim::backend::{Backend, GpuBackend};
+use lmanim::lightmesh::LightMeshStats;
 use lmanim::output::{read_exr, Image};
 use lmanim::render::frame::FrameScene;
 use lmanim::render::light::RenderLight;
@@ -37,7 +39,8 @@ use lmanim::scene::SceneDesc;
 use lmanim::scene::{Light, LightKind};
 use lmanim::schedule::FrameDelta;
 use lmanim::sequence::Sequence;
-use lmanim::settings::Settings;
+use lmanim::settings::{BackendKind, Method, Settings};
+use lmanim::stats::FrameStats;
 use lmanim_authoring::city::{city_block, CityParams};
 
 use anim_support::lmanim;
@@ -850,4 +853,75 @@ fn city_light_mesh_frames_with_64_lamps_match_the_cpu() {
         let args = ["--method", method, "--width", "96", "--height", "54"];
         assert_backends_agree(&city, "0..2", &args);
     }
+}
+
+/// The courtyard's first frame by LMM1 at 64×36 on `backend`, whose mask
+/// pool (on a GPU backend) may take `limit` bytes: the image and the light
+/// mesh's stats, or the refusal's message.
+fn courtyard_with_mask_pool(
+    backend: &mut Backend,
+    limit: usize,
+) -> Result<(Image, LightMeshStats), String> {
+    backend.limit_mask_memory(limit);
+    let mut settings = Settings {
+        width: 64,
+        height: 36,
+        method: Method::Lmm1,
+        ..Settings::default()
+    };
+    settings.lightmesh.h = Some(0.1);
+    let mut sequence = Sequence::load(&sample("courtyard.gltf")).expect("courtyard");
+    let mut stats = FrameStats::default();
+    let placed = sequence.place(&settings).expect("camera");
+    let image = sequence
+        .render(backend, &placed, &settings, &mut stats)
+        .map_err(|error| error.to_string())?;
+    Ok((image, stats.lightmesh.expect("light-mesh stats")))
+}
+
+/// A mask pool smaller than the frame's bricks evicts bricks no level
+/// reads and gives the unbounded pool's image; one smaller than a single
+/// level's bricks refuses the frame, naming h and the setting to raise.
+/// The courtyard's mirror and glass levels read bricks its camera level
+/// does not, so the smallest pool that serves the frame must evict.
+#[test]
+fn a_small_mask_pool_evicts_without_changing_the_image_or_refuses_clearly() {
+    let Some(gpu) = gpu() else { return };
+    let exact = gpu.rounds_as_the_cpu();
+    let mut backend = Backend::Gpu(Box::new(gpu));
+    let (reference, unbounded) =
+        courtyard_with_mask_pool(&mut backend, usize::MAX).expect("unbounded pool");
+    assert_eq!(unbounded.bricks_evicted, 0);
+    if exact {
+        let mut cpu = Backend::new(BackendKind::Cpu, Some(2)).expect("CPU backend");
+        let (on_cpu, _) = courtyard_with_mask_pool(&mut cpu, 0).expect("CPU frame");
+        assert_eq!(reference, on_cpu, "the GPU's frame is the CPU's");
+    }
+    // Bisect for the smallest pool that serves the frame: `refused`
+    // bricks are too few, `served` enough.
+    let slot = MaskPool::slot_bytes(1);
+    let (mut refused, mut served) = (0, unbounded.bricks_uploaded as usize);
+    let mut smallest = None;
+    while served - refused > 1 {
+        let slots = (refused + served) / 2;
+        match courtyard_with_mask_pool(&mut backend, slots * slot) {
+            Ok((image, stats)) => {
+                assert_eq!(image, reference, "a pool of {slots} bricks");
+                (served, smallest) = (slots, Some(stats));
+            }
+            Err(message) => {
+                assert!(
+                    message.contains("h = 0.1 m") && message.contains("lightmesh.gpu_memory_mib"),
+                    "{message}"
+                );
+                refused = slots;
+            }
+        }
+    }
+    let smallest = smallest.expect("a pool smaller than every upload serves the frame");
+    assert!(refused > 0, "even a one-brick pool served the frame");
+    assert!(
+        smallest.bricks_evicted > 0,
+        "a pool of {served} bricks served the frame without evicting"
+    );
 }

@@ -49,6 +49,15 @@ pub enum LightMeshError {
         limit_mib: usize,
         h: f32,
     },
+    #[error(
+        "one level of the frame reads {needed_mib:.1} MiB of node masks on the GPU \
+         (limit {limit_mib:.1} MiB) with h = {h} m; raise h or lightmesh.gpu_memory_mib"
+    )]
+    PoolTooSmall {
+        needed_mib: f64,
+        limit_mib: f64,
+        h: f32,
+    },
     #[error("h = {h} m is too small for a scene this far from its centre ({distance} m): node coordinates would overflow")]
     OutOfRange { h: f32, distance: f32 },
 }
@@ -95,6 +104,12 @@ pub struct LightMeshStats {
     /// Static bits imported from the disk cache this frame (only the
     /// frame that made the light mesh loads any).
     pub bits_loaded: u64,
+    /// Bricks copied into the GPU backend's mask pool this frame (new to
+    /// it, or edited since their last copy); 0 on the CPU backend.
+    pub bricks_uploaded: u64,
+    /// Bricks the GPU's mask pool evicted this frame to stay within
+    /// `lightmesh.gpu_memory_mib`.
+    pub bricks_evicted: u64,
 }
 
 impl LightMesh {

@@ -124,7 +124,9 @@ impl<'m> LightMeshShading<'m> {
 
         let start = Instant::now();
         let bricks: Vec<IVec3> = demand.bricks.iter().map(|brick| brick.brick).collect();
-        (self.pool).update(context, self.mesh, &bricks, self.point_to_node_tests)?;
+        let upload = (self.pool).update(context, self.mesh, &bricks, self.point_to_node_tests)?;
+        self.work.bricks_uploaded += upload.bricks;
+        self.work.bricks_evicted += upload.evicted;
         let words = demand.words;
         let mut reach = vec![0u64; records.len() * words];
         for (point, &record) in index.iter().enumerate() {

@@ -152,9 +152,10 @@ impl MaskPool {
         let binding = context.limits.max_storage_buffer_binding_size as usize;
         let limit_slots = self.limit.min(binding) / slot_bytes;
         if bricks.len() > limit_slots {
-            return Err(RenderError::LightMesh(LightMeshError::TooLarge {
-                needed_mib: (bricks.len() * slot_bytes) >> 20,
-                limit_mib: self.limit >> 20,
+            let mib = |bytes: usize| bytes as f64 / f64::from(1 << 20);
+            return Err(RenderError::LightMesh(LightMeshError::PoolTooSmall {
+                needed_mib: mib(bricks.len() * slot_bytes),
+                limit_mib: mib(self.limit),
                 h: mesh.lattice.h,
             }));
         }
