@@ -899,6 +899,7 @@ fn a_small_mask_pool_evicts_without_changing_the_image_or_refuses_clearly() {
     }
     // Bisect for the smallest pool that serves the frame: `refused`
     // bricks are too few, `served` enough.
+    // One u32 of lights per node group: the courtyard has a few lamps.
     let slot = MaskPool::slot_bytes(1);
     let (mut refused, mut served) = (0, unbounded.bricks_uploaded as usize);
     let mut smallest = None;

@@ -208,6 +208,7 @@ fn shade_by_method(
         }
         (Method::Lmm | Method::Lmm1, Some(mesh)) => {
             let start = Instant::now();
+            lightmesh.points_demanded += points.len() as u64;
             let demand = mesh.demand(points, lanes)?;
             stats.add_stage_time("demand", start.elapsed().as_secs_f64());
 

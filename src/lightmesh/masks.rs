@@ -25,6 +25,7 @@ pub const BRICK_NODES: usize = (BRICK_EDGE * BRICK_EDGE * BRICK_EDGE) as usize;
 
 #[derive(Debug)]
 pub struct MaskStore {
+    lights: usize,
     /// Words of visibility (and as many of validity) bits per node.
     words: usize,
     bricks: FxHashMap<IVec3, Brick>,
@@ -41,6 +42,7 @@ pub struct MaskStore {
 impl Clone for MaskStore {
     fn clone(&self) -> MaskStore {
         MaskStore {
+            lights: self.lights,
             words: self.words,
             bricks: self.bricks.clone(),
             nodes: self.nodes,
@@ -173,6 +175,7 @@ impl LayerUpdate {
 impl MaskStore {
     pub fn new(lights: usize) -> MaskStore {
         MaskStore {
+            lights,
             words: lights.div_ceil(64).max(1),
             bricks: FxHashMap::default(),
             nodes: 0,
@@ -203,6 +206,11 @@ impl MaskStore {
             .or_insert_with(|| Brick::new(words));
         stored.revision = self.revision;
         stored
+    }
+
+    /// The lights nL whose bits the store holds.
+    pub fn lights(&self) -> usize {
+        self.lights
     }
 
     /// Words of visibility bits per node: `ceil(nL / 64)`.

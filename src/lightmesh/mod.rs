@@ -104,6 +104,10 @@ pub struct LightMeshStats {
     /// Static bits imported from the disk cache this frame (only the
     /// frame that made the light mesh loads any).
     pub bits_loaded: u64,
+    /// Shading points whose masks went through demand and fill: all of
+    /// them on the CPU backend; on the GPU backend only those its mask
+    /// pool did not serve yet (with reuse, a few).
+    pub points_demanded: u64,
     /// Bricks copied into the GPU backend's mask pool this frame (new to
     /// it, or edited since their last copy); 0 on the CPU backend.
     pub bricks_uploaded: u64,

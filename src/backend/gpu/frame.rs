@@ -115,8 +115,9 @@ impl Frame<'_> {
 
     /// Records a level's closest hits, shading points, direct light and
     /// accumulation into the film; for `area` and the light mesh, submits
-    /// halfway to bring the points to the CPU (lamp samples; demand and
-    /// fill). The encoder to go on with.
+    /// halfway to bring points to the CPU (lamp samples; demand and fill
+    /// for the points the mask pool does not serve). The encoder to go on
+    /// with.
     fn shade(
         &self,
         mut encoder: wgpu::CommandEncoder,
@@ -151,9 +152,17 @@ impl Frame<'_> {
                 )?
             }
             DirectMethod::LightMesh(light_mesh) => {
-                let points = read_back(context, encoder, &level.points, level.count)?;
-                encoder = context.device.create_command_encoder(&Default::default());
-                let reach = light_mesh.prepare(context, self.job, &points, stats)?;
+                let (reach, next) = light_mesh.prepare(
+                    &pipelines.light_mesh,
+                    context,
+                    self.job,
+                    scene,
+                    &self.lights,
+                    level,
+                    encoder,
+                    stats,
+                )?;
+                encoder = next;
                 let direct = answer_buffer::<DirectLight>(context, "direct light", level.count)?;
                 light_mesh.record(
                     &pipelines.light_mesh,

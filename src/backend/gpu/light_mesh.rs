@@ -30,22 +30,43 @@ use crate::render::surface::ShadingPoint;
 use crate::render::FrameJob;
 use crate::stats::FrameStats;
 
-/// Bindings of `light_mesh.wgsl` beyond the points, answers and world.
+/// Bindings beyond the points and answers: the lights, the points'
+/// reaching lights, the directory and the pool, formula (2)'s counters,
+/// the coverage's flags, and the points a gather reads from.
 const LIGHTS: u32 = 10;
 const REACH: u32 = 11;
 const DIRECTORY: u32 = 12;
 const POOL: u32 = 13;
 const COUNTS: u32 = 14;
+const FLAGS: u32 = 15;
+const GATHER_SOURCE: u32 = 10;
 
-/// The formula (2) pipeline, made once per run.
-pub struct LightMeshPass {
-    pass: WorldPass,
+/// The light mesh's pipelines, made once per run: coverage (which points
+/// the pool serves), gathering the points it does not, and formula (2).
+pub struct LightMeshPasses {
+    coverage: WorldPass,
+    gather: WorldPass,
+    shade: WorldPass,
 }
 
-impl LightMeshPass {
-    pub fn new(context: &GpuContext) -> LightMeshPass {
-        LightMeshPass {
-            pass: WorldPass::new(
+impl LightMeshPasses {
+    pub fn new(context: &GpuContext) -> LightMeshPasses {
+        LightMeshPasses {
+            coverage: WorldPass::new(
+                context,
+                Entry::LightMeshCoverage,
+                WorldUse::None,
+                &[LIGHTS, DIRECTORY, POOL],
+                &[FLAGS],
+            ),
+            gather: WorldPass::new(
+                context,
+                Entry::GatherPoints,
+                WorldUse::None,
+                &[GATHER_SOURCE],
+                &[],
+            ),
+            shade: WorldPass::new(
                 context,
                 Entry::LightMesh,
                 WorldUse::Traces,
@@ -92,31 +113,76 @@ impl<'m> LightMeshShading<'m> {
         })
     }
 
-    /// Makes every mask bit `records` (a level's points, misses included)
-    /// need valid in the light mesh and resident in the pool, as the CPU
-    /// backend's demand, fill and enclosure stages would; returns the
-    /// points' reaching lights for [`LightMeshShading::record`].
+    /// Makes every mask bit `level`'s points need valid in the light mesh
+    /// and resident in the pool: the coverage pass finds the points the
+    /// pool does not serve yet, and only those come back for the CPU's
+    /// demand, fill and enclosure stages (as the CPU backend runs them);
+    /// `encoder` (holding the level's points) is submitted on the way.
+    /// Returns the points' reaching lights and the encoder to go on with.
+    #[allow(clippy::too_many_arguments)]
     pub fn prepare(
         &mut self,
+        passes: &LightMeshPasses,
         context: &GpuContext,
         job: &FrameJob,
-        records: &[SurfacePoint],
+        scene: &GpuScene,
+        lights: &FrameLights,
+        level: &LevelBuffers,
+        mut encoder: wgpu::CommandEncoder,
         stats: &mut FrameStats,
-    ) -> Result<LevelReach, RenderError> {
-        let (index, points): (Vec<usize>, Vec<ShadingPoint>) = (records.iter().enumerate())
-            .filter_map(|(index, record)| Some((index, record.shading_point()?)))
-            .unzip();
+    ) -> Result<(LevelReach, wgpu::CommandEncoder), RenderError> {
+        let start = Instant::now();
+        let p2n = self.point_to_node_tests;
+        self.work.bricks_uploaded += self.pool.refresh(context, self.mesh, p2n)?;
+        let light_words = MaskPool::light_words(self.mesh.masks().lights());
+        let reach = answer_buffer::<u32>(context, "reaching lights", level.count * light_words)?;
+        let point_words = level.count.div_ceil(32);
+        let flags = answer_buffer::<u32>(
+            context,
+            "coverage flags",
+            point_words + self.pool.capacity().div_ceil(32),
+        )?;
+        let (slots, directory) = self.pool.buffers();
+        let reads = [
+            (ITEMS, &level.points),
+            (LIGHTS, lights.buffer()),
+            (DIRECTORY, directory),
+            (POOL, slots),
+            (FLAGS, &flags),
+        ];
+        let dispatch = Dispatch::new(scene, level.count).with_lights(lights.count());
+        (passes.coverage).record(context, &mut encoder, dispatch, &reads, &reach);
+        let flags: Vec<u32> = read_back(
+            context,
+            encoder,
+            &flags,
+            point_words + self.pool.capacity().div_ceil(32),
+        )?;
+        let (unserved, read_slots) = flags.split_at(point_words);
+        let unserved: Vec<u32> = (unserved.iter().enumerate())
+            .flat_map(|(word, &bits)| {
+                crate::bits::set_bits(bits.into()).map(move |bit| (32 * word + bit) as u32)
+            })
+            .collect();
+        stats.add_stage_time("coverage", start.elapsed().as_secs_f64());
+
+        let records = self.gather(passes, context, scene, level, &unserved)?;
+        let points: Vec<ShadingPoint> = records
+            .iter()
+            .filter_map(SurfacePoint::shading_point)
+            .collect();
 
         let start = Instant::now();
+        self.work.points_demanded += points.len() as u64;
         let demand = self.mesh.demand(&points, &self.lanes)?;
         stats.add_stage_time("demand", start.elapsed().as_secs_f64());
 
         let start = Instant::now();
-        let lights = &job.frame.lights;
-        self.mesh.fill(&demand, lights, job.world, &mut self.work)?;
+        self.mesh
+            .fill(&demand, &job.frame.lights, job.world, &mut self.work)?;
         stats.add_stage_time("fill", start.elapsed().as_secs_f64());
 
-        if !self.point_to_node_tests {
+        if !p2n {
             let start = Instant::now();
             self.work.nodes_probed += self.mesh.settle_enclosure(&demand, job.world);
             stats.add_stage_time("enclosure", start.elapsed().as_secs_f64());
@@ -124,17 +190,38 @@ impl<'m> LightMeshShading<'m> {
 
         let start = Instant::now();
         let bricks: Vec<IVec3> = demand.bricks.iter().map(|brick| brick.brick).collect();
-        let upload = (self.pool).update(context, self.mesh, &bricks, self.point_to_node_tests)?;
+        let upload = (self.pool).admit(context, self.mesh, &bricks, read_slots, p2n)?;
         self.work.bricks_uploaded += upload.bricks;
         self.work.bricks_evicted += upload.evicted;
-        let words = demand.words;
-        let mut reach = vec![0u64; records.len() * words];
-        for (point, &record) in index.iter().enumerate() {
-            reach[record * words..(record + 1) * words].copy_from_slice(demand.reach_of(point));
-        }
-        let reach = storage(context, "reaching lights", &reach)?;
         stats.add_stage_time("upload", start.elapsed().as_secs_f64());
-        Ok(LevelReach { reach })
+        let encoder = context.device.create_command_encoder(&Default::default());
+        Ok((LevelReach { reach }, encoder))
+    }
+
+    /// The points of `level` at `indices`, read back.
+    fn gather(
+        &self,
+        passes: &LightMeshPasses,
+        context: &GpuContext,
+        scene: &GpuScene,
+        level: &LevelBuffers,
+        indices: &[u32],
+    ) -> Result<Vec<SurfacePoint>, RenderError> {
+        if indices.is_empty() {
+            return Ok(Vec::new());
+        }
+        let indices_buffer = storage(context, "unserved points", indices)?;
+        let gathered = answer_buffer::<SurfacePoint>(context, "gathered points", indices.len())?;
+        let mut encoder = context.device.create_command_encoder(&Default::default());
+        let reads = [(ITEMS, &indices_buffer), (GATHER_SOURCE, &level.points)];
+        (passes.gather).record(
+            context,
+            &mut encoder,
+            Dispatch::new(scene, indices.len()),
+            &reads,
+            &gathered,
+        );
+        Ok(read_back(context, encoder, &gathered, indices.len())?)
     }
 
     /// Records formula (2) at `level`'s points into `direct`, with the
@@ -142,7 +229,7 @@ impl<'m> LightMeshShading<'m> {
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
-        pass: &LightMeshPass,
+        passes: &LightMeshPasses,
         context: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         scene: &GpuScene,
@@ -161,7 +248,7 @@ impl<'m> LightMeshShading<'m> {
             (COUNTS, &self.counts),
         ];
         let dispatch = Dispatch::new(scene, level.count).with_lights(lights.count());
-        (pass.pass).record(context, encoder, dispatch, &reads, direct);
+        (passes.shade).record(context, encoder, dispatch, &reads, direct);
     }
 
     /// The frame's light-mesh statistics, once its `shading_points` are

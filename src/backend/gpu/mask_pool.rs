@@ -1,11 +1,14 @@
 //! The light mesh's masks on the GPU: a pool of brick slots in one buffer
 //! and a directory that finds a brick's slot by its coordinates.
 //!
-//! A slot is a copy of one brick of the CPU's [`MaskStore`], in the
-//! store's own layout (per node, the four groups of words: static
-//! visibility and validity, dynamic occlusion and validity; then the
-//! brick's enclosure flags), so keeping the pool current is a copy of the
-//! bricks whose revision moved, never a conversion. The store stays the
+//! A slot holds one brick of the CPU's [`MaskStore`] as the GPU reads it:
+//! per node, which lights it sees and which of those bits are valid (the
+//! store's two layers folded as `NodeMask::visible` and `valid` fold
+//! them), in u32 words of 32 lights; then the brick's enclosure flags.
+//! Folding halves the store's four groups, and u32 words halve them again
+//! for scenes of up to 32 lights, so more bricks fit the adapter's
+//! largest binding. Keeping the pool current is a copy of the bricks
+//! whose revision moved. The store stays the
 //! authority: demand, fill, invalidation and the disk cache edit it, and
 //! the pool follows with an upload of what changed. Slots stay resident
 //! across frames; a frame uploads only the bricks it reads that are new
@@ -32,8 +35,8 @@ use crate::backend::RenderError;
 use crate::lightmesh::masks::{BrickEnclosure, MaskStore, BRICK_NODES, BRICK_WORDS};
 use crate::lightmesh::{LightMesh, LightMeshError};
 
-/// Words (u64) of node masks per node: the store's four groups.
-const GROUPS: usize = 4;
+/// Groups of light words per node: visible, then valid.
+const GROUPS: usize = 2;
 
 /// `light_mesh.wgsl`'s `MeshHeader`: the lattice, the interpolation
 /// radius, the light words per node group, and the directory's size.
@@ -43,8 +46,8 @@ pub struct MeshHeader {
     pub origin: [f32; 3],
     pub h: f32,
     pub radius: f32,
-    /// u64 words per group of a node (`ceil(lights / 64)`).
-    pub words: u32,
+    /// u32 words per group of a node (`ceil(lights / 32)`).
+    pub light_words: u32,
     /// Directory entries minus one (a power of two minus one).
     pub entry_mask: u32,
     /// 1 for LMM (point-to-node segments), 0 for LMM1.
@@ -78,10 +81,10 @@ struct Resident {
 
 /// Bricks on the GPU, mirroring one [`MaskStore`].
 pub struct MaskPool {
-    /// The store mirrored and its words per group; another store (a new
-    /// light mesh) empties the pool.
+    /// The store mirrored and the u32 light words per node group; another
+    /// store (a new light mesh) empties the pool.
     store: u64,
-    words: usize,
+    light_words: usize,
     /// Bytes the slots may take.
     limit: usize,
     slots: wgpu::Buffer,
@@ -110,7 +113,7 @@ impl MaskPool {
     pub fn new(context: &GpuContext, limit: usize) -> Result<MaskPool, GpuError> {
         Ok(MaskPool {
             store: u64::MAX,
-            words: 0,
+            light_words: 0,
             limit,
             slots: slot_buffer(context, 16)?,
             capacity: 0,
@@ -123,9 +126,14 @@ impl MaskPool {
         })
     }
 
-    /// Bytes of one slot with `words` light words per group.
-    pub fn slot_bytes(words: usize) -> usize {
-        (BRICK_NODES * GROUPS * words + 2 * BRICK_WORDS) * size_of::<u64>()
+    /// u32 light words per node group for `lights` lights.
+    pub fn light_words(lights: usize) -> usize {
+        lights.div_ceil(32).max(1)
+    }
+
+    /// Bytes of one slot with `light_words` u32 words per node group.
+    pub fn slot_bytes(light_words: usize) -> usize {
+        BRICK_NODES * GROUPS * light_words * size_of::<u32>() + 2 * BRICK_WORDS * size_of::<u64>()
     }
 
     /// Bricks resident now.
@@ -133,45 +141,93 @@ impl MaskPool {
         self.resident.len()
     }
 
-    /// Brings the pool up to `mesh`'s store for a level that reads
-    /// `bricks` (sorted, no repeats): each is made resident and current,
-    /// evicting bricks the level does not read when the bound is reached.
-    pub fn update(
+    /// Brings every resident brick up to `mesh`'s store (invalidation
+    /// edits bricks no demand names) and the directory up to the pool,
+    /// so that a coverage pass reads current masks; returns how many
+    /// bricks were copied.
+    pub fn refresh(
         &mut self,
         context: &GpuContext,
         mesh: &LightMesh,
-        bricks: &[IVec3],
+        point_to_node_tests: bool,
+    ) -> Result<u64, GpuError> {
+        let store = mesh.masks();
+        if store.id() != self.store {
+            self.empty(store);
+        }
+        let slot_bytes = Self::slot_bytes(self.light_words) as u64;
+        let mut copied = 0;
+        for (&brick, resident) in &mut self.resident {
+            let revision = store.brick_revision(brick);
+            if revision.is_some_and(|revision| revision != resident.revision) {
+                resident.revision = revision.unwrap_or(resident.revision);
+                write_slot(
+                    context,
+                    &self.slots,
+                    resident.slot as u64 * slot_bytes,
+                    store,
+                    brick,
+                );
+                copied += 1;
+            }
+        }
+        self.build_directory(context, mesh, point_to_node_tests)?;
+        Ok(copied)
+    }
+
+    /// Makes `demanded` (sorted, no repeats) resident and current for a
+    /// level whose other points read the slots set in `read_slots` (a bit
+    /// per slot, from the coverage pass): bricks neither names are evicted,
+    /// least recently read first, when the bound is reached.
+    pub fn admit(
+        &mut self,
+        context: &GpuContext,
+        mesh: &LightMesh,
+        demanded: &[IVec3],
+        read_slots: &[u32],
         point_to_node_tests: bool,
     ) -> Result<PoolUpload, RenderError> {
         let store = mesh.masks();
-        if store.id() != self.store || store.words() != self.words {
-            self.empty(store);
-        }
         self.updates += 1;
-        let slot_bytes = Self::slot_bytes(self.words);
+        let now = self.updates;
+        let is_read = |slot: u32| {
+            read_slots
+                .get(slot as usize / 32)
+                .is_some_and(|&bits| bits >> (slot % 32) & 1 == 1)
+        };
+        for resident in self.resident.values_mut() {
+            if is_read(resident.slot) {
+                resident.used = now;
+            }
+        }
+        let mut missing = 0;
+        for brick in demanded {
+            match self.resident.get_mut(brick) {
+                Some(resident) => resident.used = now,
+                None => missing += 1,
+            }
+        }
+        let slot_bytes = Self::slot_bytes(self.light_words);
         let binding = context.limits.max_storage_buffer_binding_size as usize;
         let limit_slots = self.limit.min(binding) / slot_bytes;
-        if bricks.len() > limit_slots {
+        let reading = missing + self.resident.values().filter(|r| r.used == now).count();
+        if reading > limit_slots {
             let mib = |bytes: usize| bytes as f64 / f64::from(1 << 20);
             return Err(RenderError::LightMesh(LightMeshError::PoolTooSmall {
-                needed_mib: mib(bricks.len() * slot_bytes),
+                needed_mib: mib(reading * slot_bytes),
                 limit_mib: mib(self.limit),
                 h: mesh.lattice.h,
             }));
         }
-        let missing = bricks
-            .iter()
-            .filter(|brick| !self.resident.contains_key(brick))
-            .count();
         let mut upload = PoolUpload {
-            evicted: self.make_room(missing, limit_slots, bricks),
+            evicted: self.make_room(missing, limit_slots),
             ..PoolUpload::default()
         };
         let wanted = (self.allocated + missing.saturating_sub(self.free.len())).min(limit_slots);
         if wanted > self.capacity {
             self.grow(context, wanted.max(2 * self.capacity).min(limit_slots))?;
         }
-        for &brick in bricks {
+        for &brick in demanded {
             let Some(revision) = store.brick_revision(brick) else {
                 continue;
             };
@@ -186,11 +242,10 @@ impl MaskPool {
                     self.resident.entry(brick).or_insert(Resident {
                         slot,
                         revision: u64::MAX,
-                        used: 0,
+                        used: now,
                     })
                 }
             };
-            resident.used = self.updates;
             if resident.revision != revision {
                 resident.revision = revision;
                 let offset = resident.slot as u64 * slot_bytes as u64;
@@ -198,16 +253,14 @@ impl MaskPool {
                 upload.bricks += 1;
             }
         }
-        let header = MeshHeader {
-            origin: mesh.lattice.origin.to_array(),
-            h: mesh.lattice.h,
-            radius: mesh.radius(),
-            words: self.words as u32,
-            entry_mask: 0,
-            point_to_node_tests: point_to_node_tests as u32,
-        };
-        self.build_directory(context, header)?;
+        self.build_directory(context, mesh, point_to_node_tests)?;
         Ok(upload)
+    }
+
+    /// Slots the pool holds now: the bits of a coverage pass's
+    /// `read_slots`.
+    pub fn capacity(&self) -> usize {
+        self.capacity
     }
 
     /// The slots and the directory, for binding.
@@ -222,7 +275,7 @@ impl MaskPool {
     /// Forgets every brick: the pool now mirrors `store`.
     fn empty(&mut self, store: &MaskStore) {
         self.store = store.id();
-        self.words = store.words();
+        self.light_words = Self::light_words(store.lights());
         self.resident.clear();
         self.free.clear();
         self.allocated = 0;
@@ -231,19 +284,16 @@ impl MaskPool {
     }
 
     /// Frees slots for `missing` new bricks where the pool is at its
-    /// bound, evicting the least recently read bricks that `reading` does
-    /// not name; returns how many were evicted.
-    fn make_room(&mut self, missing: usize, limit_slots: usize, reading: &[IVec3]) -> u64 {
+    /// bound, evicting the least recently read bricks that the current
+    /// level does not read; returns how many were evicted.
+    fn make_room(&mut self, missing: usize, limit_slots: usize) -> u64 {
         let available = self.free.len() + (limit_slots - self.allocated.min(limit_slots));
         if missing <= available {
             return 0;
         }
+        let now = self.updates;
         let mut idle: Vec<(u64, [i32; 3])> = (self.resident.iter())
-            .filter(|(brick, _)| {
-                reading
-                    .binary_search_by_key(&brick.to_array(), |b| b.to_array())
-                    .is_err()
-            })
+            .filter(|(_, resident)| resident.used < now)
             .map(|(brick, resident)| (resident.used, brick.to_array()))
             .collect();
         idle.sort_unstable();
@@ -258,7 +308,7 @@ impl MaskPool {
 
     /// A buffer of `capacity` slots holding the resident ones.
     fn grow(&mut self, context: &GpuContext, capacity: usize) -> Result<(), GpuError> {
-        let slot_bytes = Self::slot_bytes(self.words);
+        let slot_bytes = Self::slot_bytes(self.light_words);
         let grown = context.checked("growing the mask pool", || {
             slot_buffer(context, (capacity * slot_bytes) as u64)
         })?;
@@ -278,12 +328,17 @@ impl MaskPool {
     fn build_directory(
         &mut self,
         context: &GpuContext,
-        header: MeshHeader,
+        mesh: &LightMesh,
+        point_to_node_tests: bool,
     ) -> Result<(), GpuError> {
         let entries = (2 * self.resident.len()).next_power_of_two().max(16);
         let header = MeshHeader {
+            origin: mesh.lattice.origin.to_array(),
+            h: mesh.lattice.h,
+            radius: mesh.radius(),
+            light_words: self.light_words as u32,
             entry_mask: entries as u32 - 1,
-            ..header
+            point_to_node_tests: point_to_node_tests as u32,
         };
         if !self.directory_stale && self.directory.as_ref().is_some_and(|(h, _)| *h == header) {
             return Ok(());
@@ -317,8 +372,8 @@ fn slot_buffer(context: &GpuContext, bytes: u64) -> Result<wgpu::Buffer, GpuErro
     }))
 }
 
-/// Copies `brick`'s nodes and enclosure flags from `store` into the slot
-/// at `offset`.
+/// Writes `brick`'s folded node masks and enclosure flags from `store`
+/// into the slot at `offset`.
 fn write_slot(
     context: &GpuContext,
     slots: &wgpu::Buffer,
@@ -326,13 +381,21 @@ fn write_slot(
     store: &MaskStore,
     brick: IVec3,
 ) {
-    let Some(nodes) = store.brick(brick) else {
+    let Some(bits) = store.brick(brick) else {
         return;
     };
+    let light_words = MaskPool::light_words(store.lights());
+    let mut words = Vec::with_capacity(MaskPool::slot_bytes(light_words) / size_of::<u32>());
+    for slot in 0..BRICK_NODES {
+        let mask = store.slot_mask(bits, slot);
+        let half = |bits: u64, word: usize| (bits >> (32 * (word % 2))) as u32;
+        words.extend((0..light_words).map(|word| half(mask.visible(word / 2), word)));
+        words.extend((0..light_words).map(|word| half(mask.valid(word / 2), word)));
+    }
     let BrickEnclosure { known, enclosed } = store.enclosure(brick);
-    let mut bytes = Vec::with_capacity(size_of_val(nodes) + 2 * size_of_val(&known));
-    bytes.extend_from_slice(bytemuck::cast_slice(nodes));
-    bytes.extend_from_slice(bytemuck::cast_slice(&known));
-    bytes.extend_from_slice(bytemuck::cast_slice(&enclosed));
-    context.queue.write_buffer(slots, offset, &bytes);
+    words.extend_from_slice(bytemuck::cast_slice(&known));
+    words.extend_from_slice(bytemuck::cast_slice(&enclosed));
+    context
+        .queue
+        .write_buffer(slots, offset, bytemuck::cast_slice(&words));
 }

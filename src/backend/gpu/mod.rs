@@ -47,7 +47,7 @@ use crate::stats::FrameStats;
 use camera::CameraPass;
 use film::FilmPasses;
 use frame::{DirectMethod, Frame};
-use light_mesh::{LightMeshPass, LightMeshShading};
+use light_mesh::{LightMeshPasses, LightMeshShading};
 use mask_pool::MaskPool;
 use scatter::ScatterPasses;
 use surface::{FrameSurfaces, SceneSurfaces, SurfacePass};
@@ -58,7 +58,7 @@ pub struct Pipelines {
     queries: RayQueries,
     surfaces: SurfacePass,
     direct: DirectLightPass,
-    light_mesh: LightMeshPass,
+    light_mesh: LightMeshPasses,
     scatter: ScatterPasses,
     film: FilmPasses,
 }
@@ -70,7 +70,7 @@ impl Pipelines {
             queries: RayQueries::new(context),
             surfaces: SurfacePass::new(context),
             direct: DirectLightPass::new(context),
-            light_mesh: LightMeshPass::new(context),
+            light_mesh: LightMeshPasses::new(context),
             scatter: ScatterPasses::new(context),
             film: FilmPasses::new(context),
         }

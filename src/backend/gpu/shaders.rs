@@ -12,7 +12,8 @@ pub enum Arithmetic {
 }
 
 /// The compute entry points: camera rays, the two ray queries, shading
-/// points, formula (1), formula (2), the Whitted recursion's rays and their
+/// points, formula (1), formula (2) with its coverage of the points and
+/// the gathering of those it does not cover, the Whitted recursion's rays and their
 /// compaction, and the film.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Entry {
@@ -21,6 +22,8 @@ pub enum Entry {
     AnyHit,
     Surface,
     DirectLight,
+    LightMeshCoverage,
+    GatherPoints,
     LightMesh,
     Scatter,
     ScanBlocks,
@@ -32,12 +35,14 @@ pub enum Entry {
 
 impl Entry {
     #[cfg(test)]
-    pub const ALL: [Entry; 12] = [
+    pub const ALL: [Entry; 14] = [
         Entry::CameraRays,
         Entry::ClosestHit,
         Entry::AnyHit,
         Entry::Surface,
         Entry::DirectLight,
+        Entry::LightMeshCoverage,
+        Entry::GatherPoints,
         Entry::LightMesh,
         Entry::Scatter,
         Entry::ScanBlocks,
@@ -54,6 +59,8 @@ impl Entry {
             Entry::AnyHit => "any_hit",
             Entry::Surface => "surface",
             Entry::DirectLight => "direct_light",
+            Entry::LightMeshCoverage => "light_mesh_coverage",
+            Entry::GatherPoints => "gather_points",
             Entry::LightMesh => "light_mesh",
             Entry::Scatter => "scatter",
             Entry::ScanBlocks => "scan_blocks",
@@ -70,20 +77,34 @@ const VECTOR: &str = include_str!("shaders/vector.wgsl");
 const PATH: &str = include_str!("shaders/path.wgsl");
 const SURFACE_POINT: &str = include_str!("shaders/surface_point.wgsl");
 const SCHLICK: &str = include_str!("shaders/schlick.wgsl");
+/// Omega, formula (1) at a point, and the light mesh's nodes.
+const OMEGA: &str = include_str!("shaders/omega.wgsl");
 const FORMULA_ONE: &str = include_str!("shaders/formula_one.wgsl");
-/// Formula (1)'s pass, and formula (2)'s, which falls back to formula (1).
-const DIRECT_LIGHT: [&str; 5] = [
+const LIGHT_MESH_NODES: &str = include_str!("shaders/light_mesh_nodes.wgsl");
+const DIRECT_LIGHT: [&str; 6] = [
     VECTOR,
     SURFACE_POINT,
     SCHLICK,
+    OMEGA,
     FORMULA_ONE,
     include_str!("shaders/direct_light.wgsl"),
 ];
-const LIGHT_MESH: [&str; 5] = [
+const LIGHT_MESH_COVERAGE: [&str; 6] = [
     VECTOR,
     SURFACE_POINT,
     SCHLICK,
+    OMEGA,
+    LIGHT_MESH_NODES,
+    include_str!("shaders/light_mesh_coverage.wgsl"),
+];
+/// Formula (2), which falls back to formula (1).
+const LIGHT_MESH: [&str; 7] = [
+    VECTOR,
+    SURFACE_POINT,
+    SCHLICK,
+    OMEGA,
     FORMULA_ONE,
+    LIGHT_MESH_NODES,
     include_str!("shaders/light_mesh.wgsl"),
 ];
 /// What the passes that trace share: the world and its traversal.
@@ -119,6 +140,11 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
             ],
         ),
         Entry::DirectLight => (&TRACING, &DIRECT_LIGHT),
+        Entry::LightMeshCoverage => (&[], &LIGHT_MESH_COVERAGE),
+        Entry::GatherPoints => (
+            &[],
+            &[SURFACE_POINT, include_str!("shaders/gather_points.wgsl")],
+        ),
         Entry::LightMesh => (&TRACING, &LIGHT_MESH),
         Entry::Scatter => (
             &[],
