@@ -435,3 +435,39 @@ fn gpu_frames_with_resident_masks_equal_cold_frames_and_the_cpus() {
         }
     }
 }
+
+/// On the GPU, where nothing that shadows moves (only a light's colour
+/// animates), frames after the first find every mask they read resident:
+/// no point goes back to the CPU for demand, no brick is copied again,
+/// and the frames are the CPU's.
+#[test]
+fn gpu_frames_that_move_nothing_send_no_point_to_the_cpu() {
+    let Some(gpu) = common::gpu::backend() else {
+        return;
+    };
+    let exact = gpu.rounds_as_the_cpu();
+    let mut gpu = Backend::Gpu(Box::new(gpu));
+    let scene = street_animating(vec![keyed(
+        Target::Light(1, LightProperty::Color),
+        Interpolation::Linear,
+        &[1.0, 1.0, 1.0, 1.0, 0.8, 0.6, 1.0, 0.5, 0.3, 1.0, 0.3, 0.1],
+    )]);
+    for method in [Method::Lmm1, Method::Lmm] {
+        let settings = settings_for(method);
+        let frames = rendered_in_sequence(&scene, &settings, &mut gpu);
+        let first = frames[0].1.lightmesh.expect("light-mesh stats");
+        assert!(first.points_demanded > 0 && first.bricks_uploaded > 0);
+        for (index, (image, stats)) in frames.iter().enumerate().skip(1) {
+            let mesh = stats.lightmesh.expect("light-mesh stats");
+            assert!(stats.shading_points > 0, "{method}: re-rendered");
+            assert_eq!(mesh.points_demanded, 0, "{method} at t = {}", TIMES[index]);
+            assert_eq!(mesh.bricks_uploaded, 0, "{method} at t = {}", TIMES[index]);
+        }
+        if exact {
+            let on_cpu = rendered_in_sequence(&scene, &settings, &mut cpu());
+            for ((gpu, _), (cpu, _)) in frames.iter().zip(&on_cpu) {
+                assert_eq!(gpu, cpu, "{method}");
+            }
+        }
+    }
+}

@@ -737,6 +737,48 @@ mod tests {
         assert!(cache.mask(IVec3::new(100, 0, 0)).is_none());
     }
 
+    /// A copy of the store elsewhere (the GPU's pool) trusts a brick
+    /// while its revision holds: every edit must move it, and nothing
+    /// else may.
+    #[test]
+    fn a_brick_revision_moves_with_every_edit_of_the_brick_and_only_then() {
+        let mut store = MaskStore::new(3);
+        let (a, b) = (IVec3::new(1, 2, 3), IVec3::new(40, 0, 0));
+        assert_eq!(store.brick_revision(split(a).0), None);
+        store.set(a, 0, true, Some(false));
+        store.set(b, 1, true, Some(true));
+        let revision = |store: &MaskStore, node| store.brick_revision(split(node).0).unwrap();
+        let (before_a, before_b) = (revision(&store, a), revision(&store, b));
+        assert_ne!(before_a, before_b);
+
+        // Invalidation that clears nothing in a brick leaves it alone.
+        store.invalidate(|brick, validity| {
+            if brick == split(b).0 {
+                validity.clear_lights(0, 1 << 1)
+            } else {
+                0
+            }
+        });
+        assert_eq!(revision(&store, a), before_a);
+        let after_b = revision(&store, b);
+        assert_ne!(after_b, before_b);
+
+        store.merge_enclosure(split(a).0, &BrickEnclosure::default());
+        assert_ne!(revision(&store, a), before_a);
+        assert_eq!(revision(&store, b), after_b);
+
+        let bits = BrickLightBits {
+            valid: [1; BRICK_WORDS],
+            visible: [0; BRICK_WORDS],
+        };
+        let before_import = revision(&store, b);
+        store.import_static(split(b).0, 2, &bits);
+        assert_ne!(revision(&store, b), before_import);
+
+        // A copy is another store: its edits cannot pass for the original's.
+        assert_ne!(store.clone().id(), store.id());
+    }
+
     #[test]
     fn join_inverts_split() {
         for node in [IVec3::new(-9, 0, 17), IVec3::new(7, -8, -1), IVec3::ZERO] {

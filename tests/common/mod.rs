@@ -173,14 +173,23 @@ pub fn render(scene: SceneDesc, settings: &Settings) -> Image {
 }
 
 pub fn render_with_stats(scene: SceneDesc, settings: &Settings) -> (Image, FrameStats) {
-    let mut sequence = Sequence::new(scene, "test".into()).expect("scene places");
     let mut backend =
         lmanim::backend::Backend::new(lmanim::settings::BackendKind::Cpu, settings.threads)
             .expect("thread pool");
+    render_on(&mut backend, scene, settings)
+}
+
+/// The scene's first frame rendered on `backend`, with its stats.
+pub fn render_on(
+    backend: &mut lmanim::backend::Backend,
+    scene: SceneDesc,
+    settings: &Settings,
+) -> (Image, FrameStats) {
+    let mut sequence = Sequence::new(scene, "test".into()).expect("scene places");
     let placed = sequence.place(settings).expect("camera");
     let mut stats = FrameStats::default();
     let image = sequence
-        .render(&mut backend, &placed, settings, &mut stats)
+        .render(backend, &placed, settings, &mut stats)
         .expect("frame renders");
     (image, stats)
 }
