@@ -20,12 +20,16 @@ mod common;
 
 use std::path::Path;
 
+use glam::IVec3;
 use glam::{Affine3A, DMat4, DQuat, DVec3, Quat, Vec2, Vec3};
 use lmanim::accel::{Hit, Ray, World, WorldObject};
 use lmanim::backend::gpu::mask_pool::MaskPool;
 use lmanim::backend::gpu::{FrameLights, GpuError};
 use lmanim::backend::{Backend, GpuBackend};
-use lmanim::lightmesh::LightMeshStats;
+use lmanim::lightmesh::demand::{BrickDemand, Demand};
+use lmanim::lightmesh::lattice::Lattice;
+use lmanim::lightmesh::masks::BRICK_NODES;
+use lmanim::lightmesh::{LightMesh, LightMeshStats};
 use lmanim::output::{read_exr, Image};
 use lmanim::render::frame::FrameScene;
 use lmanim::render::light::RenderLight;
@@ -925,4 +929,158 @@ fn a_small_mask_pool_evicts_without_changing_the_image_or_refuses_clearly() {
         smallest.bricks_evicted > 0,
         "a pool of {served} bricks served the frame without evicting"
     );
+}
+
+/// The fill on the GPU traces every missing (node, light) bit as its own
+/// segment; the CPU's settles groups with shafts, remembered walls and
+/// whole boxes hidden behind one wall. Over every node of eight bricks and
+/// 130 lights (every kind, one inside a dynamic box, some behind a wall
+/// that hides whole bricks, shadow edges across bricks), both layers'
+/// bits and validity are the same, brick for brick.
+#[test]
+fn gpu_fill_bits_equal_the_cpu_fill() {
+    let Some(mut gpu) = gpu() else { return };
+    let exact = gpu.rounds_as_the_cpu();
+    // A floor slab, a dynamic box, and a wall of one large triangle at
+    // x = 0.9 (one triangle, so it can hide a whole brick at once).
+    let (positions, triangles) = cube(4);
+    let wall = [
+        Vec3::new(0.9, -1.0, -8.0),
+        Vec3::new(0.9, -1.0, 8.0),
+        Vec3::new(0.9, 8.0, 0.0),
+    ];
+    let spin = Quat::from_axis_angle(Vec3::new(1.0, 1.0, 0.0).normalize(), 0.6);
+    let object = |positions, triangles, to_render, dynamic| WorldObject {
+        positions,
+        triangles,
+        to_render,
+        dynamic,
+    };
+    let world = World::build(&[
+        object(
+            &positions,
+            &triangles,
+            Affine3A::from_scale_rotation_translation(
+                Vec3::new(3.0, 0.05, 3.0),
+                Quat::IDENTITY,
+                Vec3::new(0.0, -1.2, 0.0),
+            ),
+            false,
+        ),
+        object(&wall, &[[0, 1, 2]], Affine3A::IDENTITY, false),
+        object(
+            &positions,
+            &triangles,
+            Affine3A::from_scale_rotation_translation(
+                Vec3::splat(0.35),
+                spin,
+                Vec3::new(-0.7, 0.1, 0.5),
+            ),
+            true,
+        ),
+    ]);
+    let mut lights = lights_around(Vec3::ZERO);
+    let point = |position: Vec3| Light {
+        name: None,
+        kind: LightKind::Point,
+        color: Vec3::ONE,
+        intensity: 5.0,
+        range: None,
+        radius: Some(0.1),
+    };
+    let place = |light: &Light, at: Vec3| {
+        RenderLight::place(
+            light,
+            DMat4::from_translation(at.as_dvec3()),
+            DVec3::ZERO,
+            0.0,
+        )
+    };
+    // One inside the dynamic box, the rest on a ring through the wall.
+    lights.push(place(&point(Vec3::ZERO), Vec3::new(-0.7, 0.1, 0.5)));
+    while lights.len() < 130 {
+        let angle = lights.len() as f32 * 0.41;
+        let at = Vec3::new(
+            2.5 * angle.cos(),
+            0.3 + (lights.len() % 5) as f32 * 0.3,
+            2.5 * angle.sin(),
+        );
+        lights.push(place(&point(at), at));
+    }
+    let words = lights.len().div_ceil(64);
+    let demand = Demand {
+        bricks: (0..8)
+            .map(|corner: i32| BrickDemand {
+                brick: IVec3::new(corner & 1, corner >> 1 & 1, corner >> 2 & 1) - IVec3::ONE,
+                needed: vec![u64::MAX >> (64 * words - lights.len()).min(63); BRICK_NODES * words]
+                    .into_iter()
+                    .enumerate()
+                    .map(|(at, last)| {
+                        if at % words == words - 1 {
+                            last
+                        } else {
+                            u64::MAX
+                        }
+                    })
+                    .collect(),
+            })
+            .collect(),
+        reach: Vec::new(),
+        words,
+    };
+    let mut on_cpu = LightMesh::new(Lattice::new(0.2), 2.5, lights.len(), 1 << 30);
+    let mut on_gpu = on_cpu.clone();
+    let mut cpu_stats = LightMeshStats::default();
+    on_cpu
+        .fill(&demand, &lights, &world, &mut cpu_stats)
+        .expect("CPU fill");
+    assert!(
+        cpu_stats.fill_shafts > 0
+            && cpu_stats.fill_hidden_groups > 0
+            && cpu_stats.fill_remembered > 0,
+        "the CPU fill took every shortcut: {cpu_stats:?}"
+    );
+
+    let fill = on_gpu
+        .fill_segments(&demand, lights.len())
+        .expect("segments");
+    let answers = {
+        let passes = gpu.passes_for(&world).expect("upload");
+        let frame_lights = FrameLights::upload(passes.context, &lights).expect("lights");
+        (passes.fill)
+            .trace(passes.context, passes.scene, &frame_lights, &fill.segments)
+            .expect("GPU fill")
+    };
+    let mut gpu_stats = LightMeshStats::default();
+    on_gpu.merge_segments(&demand, &fill, &answers, &mut gpu_stats);
+    assert_eq!(gpu_stats.bits_computed, cpu_stats.bits_computed);
+
+    let mut differing = 0usize;
+    let mut dynamic_blocked = 0usize;
+    for brick in &demand.bricks {
+        let (cpu, gpu) = (
+            on_cpu.masks().brick(brick.brick),
+            on_gpu.masks().brick(brick.brick),
+        );
+        let (Some(cpu), Some(gpu)) = (cpu, gpu) else {
+            panic!("brick {} was not filled", brick.brick);
+        };
+        differing += cpu
+            .iter()
+            .zip(gpu)
+            .map(|(a, b)| (a ^ b).count_ones() as usize)
+            .sum::<usize>();
+        for slot in 0..BRICK_NODES {
+            let mask = on_cpu.masks().slot_mask(cpu, slot);
+            dynamic_blocked += (0..words)
+                .map(|word| mask.dynamic_layer(word).0.count_ones() as usize)
+                .sum::<usize>();
+        }
+    }
+    assert!(dynamic_blocked > 0, "the dynamic box blocks some node");
+    if exact {
+        assert_eq!(differing, 0, "bits differ between the fills");
+    } else {
+        assert!(differing * 1000 < answers.len(), "{differing} bits differ");
+    }
 }

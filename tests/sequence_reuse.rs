@@ -457,7 +457,7 @@ fn gpu_frames_that_move_nothing_send_no_point_to_the_cpu() {
         let frames = rendered_in_sequence(&scene, &settings, &mut gpu);
         let first = frames[0].1.lightmesh.expect("light-mesh stats");
         assert!(first.points_demanded > 0 && first.bricks_uploaded > 0);
-        for (index, (image, stats)) in frames.iter().enumerate().skip(1) {
+        for (index, (_, stats)) in frames.iter().enumerate().skip(1) {
             let mesh = stats.lightmesh.expect("light-mesh stats");
             assert!(stats.shading_points > 0, "{method}: re-rendered");
             assert_eq!(mesh.points_demanded, 0, "{method} at t = {}", TIMES[index]);

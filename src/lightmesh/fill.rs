@@ -292,7 +292,11 @@ impl LightMesh {
         filled
     }
 
-    fn check_memory(&self, demand: &Demand, lights: usize) -> Result<(), LightMeshError> {
+    pub(super) fn check_memory(
+        &self,
+        demand: &Demand,
+        lights: usize,
+    ) -> Result<(), LightMeshError> {
         let bytes = self.bytes_after(demand, lights);
         if bytes > self.memory_limit {
             return Err(self.too_large(bytes));

@@ -19,6 +19,7 @@ pub mod lattice;
 pub mod masks;
 pub mod persistent;
 mod region_tree;
+pub mod segments;
 pub mod spacing;
 
 use serde::Serialize;

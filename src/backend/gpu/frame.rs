@@ -154,6 +154,7 @@ impl Frame<'_> {
             DirectMethod::LightMesh(light_mesh) => {
                 let (reach, next) = light_mesh.prepare(
                     &pipelines.light_mesh,
+                    &pipelines.fill,
                     context,
                     self.job,
                     scene,

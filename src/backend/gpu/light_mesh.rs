@@ -17,6 +17,7 @@ use glam::IVec3;
 
 use super::context::GpuContext;
 use super::direct::FrameLights;
+use super::fill::FillPass;
 use super::mask_pool::MaskPool;
 use super::pass::{answer_buffer, read_back, Dispatch, WorldPass, WorldUse, ITEMS};
 use super::scene::{storage, GpuScene};
@@ -123,6 +124,7 @@ impl<'m> LightMeshShading<'m> {
     pub fn prepare(
         &mut self,
         passes: &LightMeshPasses,
+        fill_pass: &FillPass,
         context: &GpuContext,
         job: &FrameJob,
         scene: &GpuScene,
@@ -178,8 +180,10 @@ impl<'m> LightMeshShading<'m> {
         stats.add_stage_time("demand", start.elapsed().as_secs_f64());
 
         let start = Instant::now();
+        let fill = self.mesh.fill_segments(&demand, job.frame.lights.len())?;
+        let answers = fill_pass.trace(context, scene, lights, &fill.segments)?;
         self.mesh
-            .fill(&demand, &job.frame.lights, job.world, &mut self.work)?;
+            .merge_segments(&demand, &fill, &answers, &mut self.work);
         stats.add_stage_time("fill", start.elapsed().as_secs_f64());
 
         if !p2n {

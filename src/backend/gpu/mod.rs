@@ -17,6 +17,7 @@
 mod camera;
 mod context;
 pub(crate) mod direct;
+pub mod fill;
 mod film;
 mod frame;
 mod light_mesh;
@@ -45,6 +46,7 @@ use crate::render::FrameJob;
 use crate::settings::{LightMeshSettings, Method};
 use crate::stats::FrameStats;
 use camera::CameraPass;
+use fill::FillPass;
 use film::FilmPasses;
 use frame::{DirectMethod, Frame};
 use light_mesh::{LightMeshPasses, LightMeshShading};
@@ -58,6 +60,7 @@ pub struct Pipelines {
     queries: RayQueries,
     surfaces: SurfacePass,
     direct: DirectLightPass,
+    fill: FillPass,
     light_mesh: LightMeshPasses,
     scatter: ScatterPasses,
     film: FilmPasses,
@@ -70,6 +73,7 @@ impl Pipelines {
             queries: RayQueries::new(context),
             surfaces: SurfacePass::new(context),
             direct: DirectLightPass::new(context),
+            fill: FillPass::new(context),
             light_mesh: LightMeshPasses::new(context),
             scatter: ScatterPasses::new(context),
             film: FilmPasses::new(context),
@@ -142,6 +146,7 @@ impl GpuBackend {
             context: &self.context,
             queries: &self.pipelines.queries,
             direct: &self.pipelines.direct,
+            fill: &self.pipelines.fill,
             scene,
         })
     }
@@ -263,5 +268,6 @@ pub struct GpuPasses<'a> {
     pub context: &'a GpuContext,
     pub queries: &'a RayQueries,
     pub direct: &'a DirectLightPass,
+    pub fill: &'a FillPass,
     pub scene: &'a GpuScene,
 }

@@ -24,6 +24,7 @@ pub enum Entry {
     DirectLight,
     LightMeshCoverage,
     GatherPoints,
+    FillSegments,
     LightMesh,
     Scatter,
     ScanBlocks,
@@ -35,7 +36,7 @@ pub enum Entry {
 
 impl Entry {
     #[cfg(test)]
-    pub const ALL: [Entry; 14] = [
+    pub const ALL: [Entry; 15] = [
         Entry::CameraRays,
         Entry::ClosestHit,
         Entry::AnyHit,
@@ -43,6 +44,7 @@ impl Entry {
         Entry::DirectLight,
         Entry::LightMeshCoverage,
         Entry::GatherPoints,
+        Entry::FillSegments,
         Entry::LightMesh,
         Entry::Scatter,
         Entry::ScanBlocks,
@@ -61,6 +63,7 @@ impl Entry {
             Entry::DirectLight => "direct_light",
             Entry::LightMeshCoverage => "light_mesh_coverage",
             Entry::GatherPoints => "gather_points",
+            Entry::FillSegments => "fill_segments",
             Entry::LightMesh => "light_mesh",
             Entry::Scatter => "scatter",
             Entry::ScanBlocks => "scan_blocks",
@@ -96,6 +99,15 @@ const LIGHT_MESH_COVERAGE: [&str; 6] = [
     OMEGA,
     LIGHT_MESH_NODES,
     include_str!("shaders/light_mesh_coverage.wgsl"),
+];
+/// The fill's segments, traced as formula (1)'s are.
+const FILL_SEGMENTS: [&str; 6] = [
+    VECTOR,
+    SURFACE_POINT,
+    SCHLICK,
+    OMEGA,
+    FORMULA_ONE,
+    include_str!("shaders/fill_segments.wgsl"),
 ];
 /// Formula (2), which falls back to formula (1).
 const LIGHT_MESH: [&str; 7] = [
@@ -145,6 +157,7 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
             &[],
             &[SURFACE_POINT, include_str!("shaders/gather_points.wgsl")],
         ),
+        Entry::FillSegments => (&TRACING, &FILL_SEGMENTS),
         Entry::LightMesh => (&TRACING, &LIGHT_MESH),
         Entry::Scatter => (
             &[],
@@ -210,6 +223,7 @@ mod tests {
         use crate::accel::flat::{FlatBinaryNode, FlatInstance, FlatWideNode};
         use crate::backend::gpu::camera::CameraRecord;
         use crate::backend::gpu::direct::{DirectLight, FlatLight};
+        use crate::backend::gpu::fill::FillSegment;
         use crate::backend::gpu::mask_pool::MeshHeader;
         use crate::backend::gpu::scene::Params;
         use crate::backend::gpu::surface::{
@@ -287,6 +301,11 @@ mod tests {
                 vec![0, 12, 16, 28, 32, 44, 48, 52],
             ),
             ("DirectLight", size_of::<DirectLight>(), vec![0, 12]),
+            (
+                "FillSegment",
+                size_of::<FillSegment>(),
+                vec![0, 12, 16, 20, 24, 28],
+            ),
             (
                 "MeshHeader",
                 size_of::<MeshHeader>(),
