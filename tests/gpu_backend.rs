@@ -854,7 +854,7 @@ fn city_light_mesh_frames_with_64_lamps_match_the_cpu() {
         .and_then(|builder| builder.write_glb(&city))
         .expect("city");
     for method in ["lmm1", "lmm"] {
-        let args = ["--method", method, "--width", "96", "--height", "54"];
+        let args = ["--method", method, "--width", "64", "--height", "36"];
         assert_backends_agree(&city, "0..2", &args);
     }
 }
@@ -980,7 +980,7 @@ fn gpu_fill_bits_equal_the_cpu_fill() {
         ),
     ]);
     let mut lights = lights_around(Vec3::ZERO);
-    let point = |position: Vec3| Light {
+    let point = Light {
         name: None,
         kind: LightKind::Point,
         color: Vec3::ONE,
@@ -997,7 +997,7 @@ fn gpu_fill_bits_equal_the_cpu_fill() {
         )
     };
     // One inside the dynamic box, the rest on a ring through the wall.
-    lights.push(place(&point(Vec3::ZERO), Vec3::new(-0.7, 0.1, 0.5)));
+    lights.push(place(&point, Vec3::new(-0.7, 0.1, 0.5)));
     while lights.len() < 130 {
         let angle = lights.len() as f32 * 0.41;
         let at = Vec3::new(
@@ -1005,7 +1005,7 @@ fn gpu_fill_bits_equal_the_cpu_fill() {
             0.3 + (lights.len() % 5) as f32 * 0.3,
             2.5 * angle.sin(),
         );
-        lights.push(place(&point(at), at));
+        lights.push(place(&point, at));
     }
     let words = lights.len().div_ceil(64);
     let demand = Demand {

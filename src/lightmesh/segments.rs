@@ -61,45 +61,42 @@ impl LightMesh {
     ) -> Result<SegmentFill, LightMeshError> {
         self.check_memory(demand, lights)?;
         let words = demand.words;
-        let per_brick: Vec<(Vec<Segment>, Vec<(u32, u16)>)> =
-            (demand.bricks.par_iter().enumerate())
-                .map(|(index, brick)| {
-                    let stored = self.masks.brick(brick.brick);
-                    let mut segments = Vec::new();
-                    let mut places = Vec::new();
-                    for slot in 0..BRICK_NODES {
-                        let mask = stored.map(|bits| self.masks.slot_mask(bits, slot));
-                        let origin = self.lattice.node_position(join(brick.brick, slot));
-                        for word in 0..words {
-                            let needed = brick.needed[slot * words + word];
-                            let ((visible, valid), (_, dynamic_valid)) = mask
-                                .map_or(((0, 0), (0, 0)), |mask| {
-                                    (mask.static_layer(word), mask.dynamic_layer(word))
-                                });
-                            let test_static = needed & !valid;
-                            let known_visible = visible & valid;
-                            let test_dynamic =
-                                needed & (test_static | known_visible) & !dynamic_valid;
-                            for bit in set_bits(test_static | test_dynamic) {
-                                let at = 1u64 << bit;
-                                segments.push(Segment {
-                                    origin,
-                                    light: (word * 64 + bit) as u32,
-                                    test_static: test_static & at != 0,
-                                    known_visible: known_visible & at != 0,
-                                    test_dynamic: test_dynamic & at != 0,
-                                });
-                                places.push((index as u32, slot as u16));
-                            }
+        let per_brick: Vec<SegmentFill> = (demand.bricks.par_iter().enumerate())
+            .map(|(index, brick)| {
+                let stored = self.masks.brick(brick.brick);
+                let mut fill = SegmentFill::default();
+                for slot in 0..BRICK_NODES {
+                    let mask = stored.map(|bits| self.masks.slot_mask(bits, slot));
+                    let origin = self.lattice.node_position(join(brick.brick, slot));
+                    for word in 0..words {
+                        let needed = brick.needed[slot * words + word];
+                        let ((visible, valid), (_, dynamic_valid)) = mask
+                            .map_or(((0, 0), (0, 0)), |mask| {
+                                (mask.static_layer(word), mask.dynamic_layer(word))
+                            });
+                        let test_static = needed & !valid;
+                        let known_visible = visible & valid;
+                        let test_dynamic = needed & (test_static | known_visible) & !dynamic_valid;
+                        for bit in set_bits(test_static | test_dynamic) {
+                            let at = 1u64 << bit;
+                            fill.segments.push(Segment {
+                                origin,
+                                light: (word * 64 + bit) as u32,
+                                test_static: test_static & at != 0,
+                                known_visible: known_visible & at != 0,
+                                test_dynamic: test_dynamic & at != 0,
+                            });
+                            fill.places.push((index as u32, slot as u16));
                         }
                     }
-                    (segments, places)
-                })
-                .collect();
+                }
+                fill
+            })
+            .collect();
         let mut fill = SegmentFill::default();
-        for (segments, places) in per_brick {
-            fill.segments.extend(segments);
-            fill.places.extend(places);
+        for brick in per_brick {
+            fill.segments.extend(brick.segments);
+            fill.places.extend(brick.places);
         }
         Ok(fill)
     }
