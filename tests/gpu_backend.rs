@@ -1084,3 +1084,44 @@ fn gpu_fill_bits_equal_the_cpu_fill() {
         assert!(differing * 1000 < answers.len(), "{differing} bits differ");
     }
 }
+
+/// The disk cache on the GPU backend: a second run starts from the static
+/// bits the first saved (the CPU's light mesh loads them; the pool copies
+/// the bricks up) and renders the same frame as the first, and as the CPU.
+#[test]
+fn gpu_light_mesh_frames_start_from_the_disk_cache() {
+    let Some(gpu) = gpu() else { return };
+    let exact = gpu.rounds_as_the_cpu();
+    let mut backend = Backend::Gpu(Box::new(gpu));
+    let cache = tempfile::tempdir().expect("tempdir");
+    let mut settings = Settings {
+        width: 64,
+        height: 36,
+        method: Method::Lmm1,
+        ..Settings::default()
+    };
+    settings.lightmesh.h = Some(0.1);
+    let mut run = |backend: &mut Backend| {
+        let mut sequence = Sequence::load(&sample("courtyard.gltf")).expect("courtyard");
+        sequence.set_cache_dir(Some(cache.path().to_path_buf()));
+        let placed = sequence.place(&settings).expect("camera");
+        let mut stats = FrameStats::default();
+        let image = (sequence.render(backend, &placed, &settings, &mut stats)).expect("frame");
+        sequence.save_cache().expect("cache saved");
+        (image, stats.lightmesh.expect("light-mesh stats"))
+    };
+    let (first, cold) = run(&mut backend);
+    let (second, warm) = run(&mut backend);
+    assert_eq!(cold.bits_loaded, 0);
+    assert!(
+        warm.bits_loaded > 0,
+        "the second run loads the first's bits"
+    );
+    assert!(warm.bits_computed < cold.bits_computed);
+    assert_eq!(first, second);
+    if exact {
+        let mut cpu = Backend::new(BackendKind::Cpu, Some(2)).expect("CPU backend");
+        let (on_cpu, _) = courtyard_with_mask_pool(&mut cpu, 0).expect("CPU frame");
+        assert_eq!(first, on_cpu);
+    }
+}

@@ -1,10 +1,11 @@
 //! Backends run a frame's stages on some hardware, behind one seam:
-//! [`Backend`]. The CPU backend (rayon) is the reference and runs every
-//! method; the GPU backend (wgpu compute) runs the ray tracing of the
-//! stages (primary and secondary hits, formula (1) whole, the lamps'
-//! shadow segments) as compute passes that round as the CPU does, and
-//! keeps the rest the CPU's, so its frames match the CPU's. The core
-//! (scene, accel, render) never knows which one runs it.
+//! [`Backend`]. The CPU backend (rayon) is the reference; the GPU backend
+//! (wgpu compute) runs hits, shading points, formula (1), the lamps'
+//! segments, the light mesh's fill and formula (2) as compute passes that
+//! round as the CPU does, and keeps on the CPU what it cannot do as well
+//! (lamp sampling, the light mesh's demand and bookkeeping), so its frames
+//! match the CPU's. Both run every method. The core (scene, accel,
+//! render) never knows which one runs it.
 
 mod band;
 pub mod cpu;

@@ -7,8 +7,12 @@
 //! their sum — where the points lie ([`direct`]), their light added to
 //! their pixel samples, and the next level's mirror and glass rays packed
 //! in point order ([`scatter`]). The band's pixels come back resolved
-//! ([`film`]). `--method area` alone brings a level's points back, to
-//! sample its lamps on the CPU and test their segments on the GPU.
+//! ([`film`]). `--method area` brings a level's points back, to sample its
+//! lamps on the CPU and test their segments on the GPU; `lmm` and `lmm1`
+//! shade by formula (2) from masks resident on the GPU ([`mask_pool`]),
+//! bringing back only the points those masks do not serve yet, for the
+//! CPU's demand, whose missing bits the GPU fills ([`fill`],
+//! [`light_mesh`]).
 //!
 //! The passes round as the CPU does, so a frame differs from the CPU
 //! backend's only where a query answers differently, and tests compare
