@@ -1101,7 +1101,7 @@ fn gpu_light_mesh_frames_start_from_the_disk_cache() {
         ..Settings::default()
     };
     settings.lightmesh.h = Some(0.1);
-    let mut run = |backend: &mut Backend| {
+    let run = |backend: &mut Backend| {
         let mut sequence = Sequence::load(&sample("courtyard.gltf")).expect("courtyard");
         sequence.set_cache_dir(Some(cache.path().to_path_buf()));
         let placed = sequence.place(&settings).expect("camera");
