@@ -859,14 +859,8 @@ fn city_light_mesh_frames_with_64_lamps_match_the_cpu() {
     }
 }
 
-/// The courtyard's first frame by LMM1 at 64×36 on `backend`, whose mask
-/// pool (on a GPU backend) may take `limit` bytes: the image and the light
-/// mesh's stats, or the refusal's message.
-fn courtyard_with_mask_pool(
-    backend: &mut Backend,
-    limit: usize,
-) -> Result<(Image, LightMeshStats), String> {
-    backend.limit_mask_memory(limit);
+/// The courtyard by LMM1 at 64×36 with h = 0.1 m.
+fn courtyard_lmm1() -> Settings {
     let mut settings = Settings {
         width: 64,
         height: 36,
@@ -874,13 +868,40 @@ fn courtyard_with_mask_pool(
         ..Settings::default()
     };
     settings.lightmesh.h = Some(0.1);
+    settings
+}
+
+/// The courtyard's frames at `times` (one sequence, masks reused) by
+/// [`courtyard_lmm1`] on `backend`, whose mask pool (on a GPU backend)
+/// may take `limit` bytes: each image with the light mesh's stats, or the
+/// refusal's message.
+fn courtyard_frames_with_mask_pool(
+    backend: &mut Backend,
+    limit: usize,
+    times: &[f64],
+) -> Result<Vec<(Image, LightMeshStats)>, String> {
+    backend.limit_mask_memory(limit);
+    let settings = courtyard_lmm1();
     let mut sequence = Sequence::load(&sample("courtyard.gltf")).expect("courtyard");
-    let mut stats = FrameStats::default();
-    let placed = sequence.place(&settings).expect("camera");
-    let image = sequence
-        .render(backend, &placed, &settings, &mut stats)
-        .map_err(|error| error.to_string())?;
-    Ok((image, stats.lightmesh.expect("light-mesh stats")))
+    let mut frames = Vec::new();
+    for &time in times {
+        let mut stats = FrameStats::default();
+        let placed = (sequence.advance(time, &settings, &mut stats)).expect("camera");
+        let image = sequence
+            .render(backend, &placed, &settings, &mut stats)
+            .map_err(|error| error.to_string())?;
+        frames.push((image, stats.lightmesh.expect("light-mesh stats")));
+    }
+    Ok(frames)
+}
+
+/// The courtyard's first frame, as [`courtyard_frames_with_mask_pool`].
+fn courtyard_with_mask_pool(
+    backend: &mut Backend,
+    limit: usize,
+) -> Result<(Image, LightMeshStats), String> {
+    let mut frames = courtyard_frames_with_mask_pool(backend, limit, &[0.0])?;
+    Ok(frames.remove(0))
 }
 
 /// A mask pool smaller than the frame's bricks evicts bricks no level
@@ -929,6 +950,32 @@ fn a_small_mask_pool_evicts_without_changing_the_image_or_refuses_clearly() {
         smallest.bricks_evicted > 0,
         "a pool of {served} bricks served the frame without evicting"
     );
+    // Over the rolling ball's frames, with the smallest pool (a little
+    // larger) that serves them all: later frames read most bricks
+    // resident (points the pool serves, whose bricks must not be
+    // evicted), admit the others and evict.
+    if exact {
+        let times = [0.0, 1.0 / 24.0, 2.0 / 24.0];
+        let mut cpu = Backend::new(BackendKind::Cpu, Some(2)).expect("CPU backend");
+        let on_cpu = courtyard_frames_with_mask_pool(&mut cpu, 0, &times).expect("CPU frames");
+        let evicting = (0..8)
+            .filter_map(|step| {
+                let slots = served + step * served / 16;
+                courtyard_frames_with_mask_pool(&mut backend, slots * slot, &times).ok()
+            })
+            .find(|frames| {
+                frames[1..]
+                    .iter()
+                    .any(|(_, stats)| stats.bricks_evicted > 0)
+            })
+            .expect("a pool that serves every frame by evicting");
+        for (time, ((gpu, stats), (cpu, _))) in times.iter().zip(evicting.iter().zip(&on_cpu)) {
+            assert_eq!(gpu, cpu, "t = {time}");
+            if *time > 0.0 {
+                assert!(stats.points_demanded > 0 && stats.bricks_uploaded > 0);
+            }
+        }
+    }
 }
 
 /// The fill on the GPU traces every missing (node, light) bit as its own

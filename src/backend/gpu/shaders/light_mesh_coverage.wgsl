@@ -9,8 +9,10 @@
 @group(0) @binding(1) var<storage, read> points: array<SurfacePoint>;
 // Per point, `light_words` u32 of reaching-light bits.
 @group(0) @binding(7) var<storage, read_write> reach: array<u32>;
-// A bit per point: set where the pool does not serve it yet.
-@group(0) @binding(15) var<storage, read_write> unserved: array<atomic<u32>>;
+// A bit per point, set where the pool does not serve it yet; then a bit
+// per pool slot, set where a point read the slot's brick (the CPU then
+// keeps those bricks when it must evict).
+@group(0) @binding(15) var<storage, read_write> flags: array<atomic<u32>>;
 
 // Whether the pool holds every bit of `reach` (from `base`) that formula
 // (2) will read at `node`.
@@ -55,11 +57,18 @@ fn light_mesh_coverage(@builtin(global_invocation_id) id: vec3<u32>) {
     if any_light == 0u {
         return;
     }
+    let slot_flags = (params.item_count + 31u) / 32u;
+    var marked = -1;
     var nodes = walk(half_ball(point.position, point.geometric_normal));
     while next_node(&nodes) {
         if !serves(node_mask(nodes.node), base, light_words) {
-            atomicOr(&unserved[index / 32u], 1u << (index % 32u));
+            atomicOr(&flags[index / 32u], 1u << (index % 32u));
             return;
+        }
+        if cached_slot != marked {
+            marked = cached_slot;
+            let slot = u32(cached_slot);
+            atomicOr(&flags[slot_flags + slot / 32u], 1u << (slot % 32u));
         }
     }
 }
