@@ -978,9 +978,9 @@ fn a_small_mask_pool_evicts_without_changing_the_image_or_refuses_clearly() {
     }
 }
 
-/// The fill on the GPU traces every missing (node, light) bit as its own
-/// segment; the CPU's settles groups with shafts, remembered walls and
-/// whole boxes hidden behind one wall. Over every node of eight bricks and
+/// The fill on the GPU settles groups with the CPU's shafts and traces
+/// each bit left as its own segment; the CPU's also remembers walls and
+/// hides whole boxes behind one wall. Over every node of eight bricks and
 /// 130 lights (every kind, one inside a dynamic box, some behind a wall
 /// that hides whole bricks, shadow edges across bricks), both layers'
 /// bits and validity are the same, brick for brick.
@@ -1089,7 +1089,7 @@ fn gpu_fill_bits_equal_the_cpu_fill() {
     );
 
     let fill = on_gpu
-        .fill_segments(&demand, lights.len())
+        .fill_segments(&demand, &lights, &world)
         .expect("segments");
     let answers = {
         let passes = gpu.passes_for(&world).expect("upload");
@@ -1101,6 +1101,7 @@ fn gpu_fill_bits_equal_the_cpu_fill() {
     let mut gpu_stats = LightMeshStats::default();
     on_gpu.merge_segments(&demand, &fill, &answers, &mut gpu_stats);
     assert_eq!(gpu_stats.bits_computed, cpu_stats.bits_computed);
+    assert!(gpu_stats.fill_shafts > 0 && gpu_stats.fill_segments > 0);
 
     let mut differing = 0usize;
     let mut dynamic_blocked = 0usize;

@@ -51,7 +51,7 @@ struct FillWork {
 }
 
 /// Fewer nodes than this are cheaper to trace one by one than by a shaft.
-const MIN_SHAFT_NODES: usize = 4;
+pub(super) const MIN_SHAFT_NODES: usize = 4;
 
 /// The two layers of a mask, each tested against its own geometry.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -180,7 +180,7 @@ impl<'m> LightMeshShading<'m> {
         stats.add_stage_time("demand", start.elapsed().as_secs_f64());
 
         let start = Instant::now();
-        let fill = self.mesh.fill_segments(&demand, job.frame.lights.len())?;
+        let fill = (self.mesh).fill_segments(&demand, &job.frame.lights, job.world)?;
         let answers = fill_pass.trace(context, scene, lights, &fill.segments)?;
         self.mesh
             .merge_segments(&demand, &fill, &answers, &mut self.work);
