@@ -185,11 +185,11 @@ impl LightMesh {
                     }
                 }
             }
-            for slot in 0..BRICK_NODES {
+            for (slot, &origin) in positions.iter().enumerate() {
                 for bit in set_bits(bits.test_static[slot] | bits.test_dynamic[slot]) {
                     let at = 1u64 << bit;
                     fill.segments.push(Segment {
-                        origin: positions[slot],
+                        origin,
                         light: (word * 64 + bit) as u32,
                         test_static: bits.test_static[slot] & at != 0,
                         known_visible: bits.known_visible[slot] & at != 0,
