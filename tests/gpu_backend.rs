@@ -1152,13 +1152,7 @@ fn gpu_light_mesh_frames_start_from_the_disk_cache() {
     let exact = gpu.rounds_as_the_cpu();
     let mut backend = Backend::Gpu(Box::new(gpu));
     let cache = tempfile::tempdir().expect("tempdir");
-    let mut settings = Settings {
-        width: 64,
-        height: 36,
-        method: Method::Lmm1,
-        ..Settings::default()
-    };
-    settings.lightmesh.h = Some(0.1);
+    let settings = courtyard_lmm1();
     let run = |backend: &mut Backend| {
         let mut sequence = Sequence::load(&sample("courtyard.gltf")).expect("courtyard");
         sequence.set_cache_dir(Some(cache.path().to_path_buf()));
