@@ -7,18 +7,21 @@
 //! them), in u32 words of 32 lights; then the brick's enclosure flags.
 //! Folding halves the store's four groups, and u32 words halve them again
 //! for scenes of up to 32 lights, so more bricks fit the adapter's
-//! largest binding. Keeping the pool current is a copy of the bricks
-//! whose revision moved. The store stays the
-//! authority: demand, fill, invalidation and the disk cache edit it, and
-//! the pool follows with an upload of what changed. Slots stay resident
-//! across frames; a frame uploads only the bricks it reads that are new
-//! to the pool or were edited since their upload.
+//! largest binding.
 //!
-//! The pool is bounded (`lightmesh.gpu_memory_mib`): bricks the current
-//! level does not read are evicted, least recently used first; a level
-//! that reads more bricks than the bound holds is refused with the light
-//! mesh's error naming h and the limit. Which slot a brick gets never
-//! changes an image: the shader finds it through the directory.
+//! The store stays the authority: demand, fill, invalidation and the disk
+//! cache edit it, and the pool follows. Slots stay resident across frames;
+//! [`MaskPool::refresh`] copies the resident bricks edited since their
+//! copy (each edit moves a brick's revision) before a level's coverage
+//! pass reads them, and [`MaskPool::admit`] the bricks the level's demand
+//! named.
+//!
+//! The pool is bounded (`lightmesh.gpu_memory_mib`, and the adapter's
+//! largest binding): bricks the current level does not read are evicted,
+//! least recently read first; a level that reads more bricks than the
+//! bound holds is refused with the light mesh's error naming h and the
+//! limit. Which slot a brick gets never changes an image: the shaders find
+//! it through the directory.
 //!
 //! The directory is an open-addressing hash table (linear probing, at most
 //! half full), rebuilt on the CPU when the resident set changes and
@@ -134,11 +137,6 @@ impl MaskPool {
     /// Bytes of one slot with `light_words` u32 words per node group.
     pub fn slot_bytes(light_words: usize) -> usize {
         BRICK_NODES * GROUPS * light_words * size_of::<u32>() + 2 * BRICK_WORDS * size_of::<u64>()
-    }
-
-    /// Bricks resident now.
-    pub fn resident(&self) -> usize {
-        self.resident.len()
     }
 
     /// Brings every resident brick up to `mesh`'s store (invalidation
