@@ -79,6 +79,18 @@ impl CpuBackend {
         Ok(image)
     }
 
+    /// Computes the masks `job`'s frame will need (hits, demand and fill,
+    /// band by band) without shading it; the light-mesh stats go to
+    /// `stats`.
+    pub fn warm(
+        &self,
+        job: &FrameJob,
+        mesh: &mut LightMesh,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
+        self.pool.install(|| warm_light_mesh(job, mesh, stats))
+    }
+
     /// Renders one frame with every light visible from every point
     /// (formula (1) with V = 1): the light each pixel would get without
     /// shadows, against which the study measures how shadowed a pixel is.
@@ -131,6 +143,33 @@ impl CpuBackend {
             })
         })
     }
+}
+
+/// The stages of a light-mesh frame that fill masks (hits, demand, fill),
+/// band by band on the current rayon pool, without shading: what a farm's
+/// first task runs to fill the disk cache (`lmanim warm`). Enclosure
+/// flags are left to the render, since the cache does not keep them.
+pub(super) fn warm_light_mesh(
+    job: &FrameJob,
+    mesh: &mut LightMesh,
+    stats: &mut FrameStats,
+) -> Result<(), RenderError> {
+    let lanes = LightLanes::new(&job.frame.lights);
+    let mut work = LightMeshStats::default();
+    for rows in bands(job) {
+        let (points, _) = hits(job, rows, stats);
+        let start = Instant::now();
+        work.points_demanded += points.len() as u64;
+        let demand = mesh.demand(&points, &lanes)?;
+        stats.add_stage_time("demand", start.elapsed().as_secs_f64());
+        let start = Instant::now();
+        mesh.fill(&demand, &job.frame.lights, job.world, &mut work)?;
+        stats.add_stage_time("fill", start.elapsed().as_secs_f64());
+        stats.shading_points += points.len() as u64;
+    }
+    stats.rays.shadow += work.fill_segments;
+    stats.lightmesh = Some(mesh.frame_stats(work, PointCounts::default(), stats.shading_points));
+    Ok(())
 }
 
 /// Stages 1–2 for one band of rows: the camera rays' hits, then the

@@ -87,6 +87,20 @@ impl Backend {
         }
     }
 
+    /// Computes the light-mesh masks `job`'s frame will need, without
+    /// shading it (`lmanim warm`); the light-mesh stats go to `stats`.
+    pub fn warm(
+        &mut self,
+        job: &FrameJob,
+        mesh: &mut LightMesh,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
+        match self {
+            Backend::Cpu(cpu) => cpu.warm(job, mesh, stats),
+            Backend::Gpu(gpu) => gpu.warm(job, mesh, stats),
+        }
+    }
+
     /// Renders one frame by `method`; stage times, ray and point counts go
     /// to `stats`. The light-mesh methods shade from `light_mesh`, which
     /// the caller keeps across frames so that its masks are reused; the

@@ -254,6 +254,18 @@ impl GpuBackend {
         })
     }
 
+    /// Computes the masks `job`'s frame will need without shading it, on
+    /// the CPU workers (the CPU backend's stages): warming a farm's disk
+    /// cache needs no GPU.
+    pub fn warm(
+        &self,
+        job: &FrameJob,
+        mesh: &mut LightMesh,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
+        (self.pool).install(|| super::cpu::warm_light_mesh(job, mesh, stats))
+    }
+
     /// The shading points of `rays`' closest hits as the GPU makes them
     /// for `job`'s frame (None where a ray hits nothing), for comparing
     /// with the CPU's.
