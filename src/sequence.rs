@@ -299,6 +299,7 @@ fn frame_job<'a>(
         height: settings.height,
         spp: settings.spp,
         max_depth: settings.max_depth,
+        environment: settings.environment(),
     }
 }
 

@@ -7,10 +7,12 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::lightmesh::lattice::MAX_KI;
 use crate::output::ExrPrecision;
+use crate::render::environment::Environment;
 
 /// The largest width or height accepted: beyond it a frame buffer no
 /// longer fits a sensible amount of memory (and EXR viewers choke).
@@ -60,6 +62,13 @@ pub struct Settings {
     pub sheet_columns: u32,
     /// The sheet shows every this many-th frame of the run.
     pub sheet_every: u32,
+    /// Linear RGB radiance of the pixels where camera rays meet nothing,
+    /// which makes frames opaque; None leaves them transparent black.
+    pub background: Option<[f32; 3]>,
+    /// Linear RGB radiance of a uniform sky lighting every surface's
+    /// diffuse part, unshadowed (`render/environment.rs`); None: no
+    /// ambient term.
+    pub ambient: Option<[f32; 3]>,
     /// Worker threads; None uses every core.
     pub threads: Option<usize>,
     /// Output frame pattern (`frame.####.exr`); None derives one from the
@@ -91,6 +100,8 @@ impl Default for Settings {
             contact_sheet: None,
             sheet_columns: 6,
             sheet_every: 1,
+            background: None,
+            ambient: None,
             threads: None,
             out: None,
             cache_dir: Some("cache".into()),
@@ -225,6 +236,14 @@ pub enum SettingsError {
 }
 
 impl Settings {
+    /// The frame's background and ambient sky as the renderer takes them.
+    pub fn environment(&self) -> Environment {
+        Environment {
+            background: self.background.map(Vec3::from_array),
+            ambient: self.ambient.map(Vec3::from_array),
+        }
+    }
+
     /// Reads and validates a RON settings file.
     pub fn load(path: &Path) -> Result<Settings, SettingsError> {
         let text = std::fs::read_to_string(path).map_err(|source| SettingsError::Read {
@@ -289,6 +308,13 @@ impl Settings {
                 "sheet_columns is {}; it must be 1 to {MAX_SHEET_COLUMNS}",
                 self.sheet_columns
             ));
+        }
+        for (name, colour) in [("background", self.background), ("ambient", self.ambient)] {
+            if let Some(colour) = colour.filter(|c| c.iter().any(|v| !v.is_finite() || *v < 0.0)) {
+                return Err(format!(
+                    "{name} is {colour:?}; it must be three finite, non-negative radiances (linear RGB)"
+                ));
+            }
         }
         if self.sheet_every == 0 {
             return Err("sheet_every is 0; it must be at least 1".into());

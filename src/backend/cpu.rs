@@ -16,13 +16,14 @@ use std::time::Instant;
 use glam::{UVec2, Vec3};
 use rayon::prelude::*;
 
-use super::band::{bands, resolve, shaded_value, TILE};
+use super::band::{bands, resolve, TILE};
 use super::sampling::{film_position, lamp_sample};
 use super::{thread_pool, BackendError, RenderError};
 use crate::accel::Ray;
 use crate::lightmesh::interpolate::{PointCounts, Scratch};
 use crate::lightmesh::{LightMesh, LightMeshStats};
 use crate::output::Image;
+use crate::render::environment::Environment;
 use crate::render::omega::LightLanes;
 use crate::render::scatter::secondary_rays;
 use crate::render::surface::ShadingPoint;
@@ -100,7 +101,7 @@ impl CpuBackend {
                     PointCounts::default(),
                 )
             };
-            Ok::<_, Infallible>(shade_stage(points, stats, || (), shade).0)
+            Ok::<_, Infallible>(shade_stage(points, &job.environment, stats, || (), shade).0)
         });
         match unshadowed {
             Ok(image) => image,
@@ -191,6 +192,7 @@ fn shade_by_method(
     let (shaded, band_counts): (Vec<Vec3>, PointCounts) = match (method, light_mesh) {
         (Method::Whitted, _) => shade_stage(
             points,
+            &job.environment,
             stats,
             || (),
             |_, _, point| {
@@ -204,6 +206,7 @@ fn shade_by_method(
             let band_start = rows.start as u64 * job.width as u64 * job.spp as u64;
             shade_stage(
                 points,
+                &job.environment,
                 stats,
                 || (),
                 |_, _, point| {
@@ -234,16 +237,22 @@ fn shade_by_method(
             let mesh = &*mesh;
             let point_to_node_tests = method.tests_point_to_node();
             let scratch = || Scratch::new(mesh);
-            shade_stage(points, stats, scratch, |scratch, index, point| {
-                mesh.shade(
-                    point,
-                    demand.reach_of(index),
-                    lanes,
-                    job.world,
-                    point_to_node_tests,
-                    scratch,
-                )
-            })
+            shade_stage(
+                points,
+                &job.environment,
+                stats,
+                scratch,
+                |scratch, index, point| {
+                    mesh.shade(
+                        point,
+                        demand.reach_of(index),
+                        lanes,
+                        job.world,
+                        point_to_node_tests,
+                        scratch,
+                    )
+                },
+            )
         }
         (Method::Lmm | Method::Lmm1, None) => return Err(RenderError::NoLightMesh(method)),
     };
@@ -254,13 +263,15 @@ fn shade_by_method(
     Ok((shaded, band_counts))
 }
 
-/// The last stage before resolve: every point's emission plus its direct
-/// light by `direct` (formula (1), (2) or the lamp estimate), weighted by
-/// its path throughput, and what shading them cost. `init` makes
+/// The last stage before resolve: every point's emission (and the
+/// `environment`'s ambient sky) plus its direct light by `direct`
+/// (formula (1), (2) or the lamp estimate), weighted by its path
+/// throughput, and what shading them cost. `init` makes
 /// per-thread scratch space. Counts are integers, so summing them in any
 /// order gives the same totals.
 fn shade_stage<S>(
     points: &[ShadingPoint],
+    environment: &Environment,
     stats: &mut FrameStats,
     init: impl Fn() -> S + Send + Sync,
     direct: impl Fn(&mut S, usize, &ShadingPoint) -> (Vec3, PointCounts) + Send + Sync,
@@ -276,7 +287,7 @@ fn shade_stage<S>(
             let mut counts = PointCounts::default();
             for (offset, (value, point)) in out.iter_mut().zip(points).enumerate() {
                 let (light, point_counts) = direct(scratch, chunk * CHUNK + offset, point);
-                *value = shaded_value(point, light);
+                *value = environment.shaded_value(point, light);
                 counts += point_counts;
             }
             counts

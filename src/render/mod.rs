@@ -5,6 +5,7 @@
 pub mod area;
 pub mod brdf;
 pub mod camera;
+pub mod environment;
 pub mod frame;
 pub mod lanes;
 pub mod light;
@@ -17,6 +18,7 @@ pub mod whitted;
 
 use crate::accel::World;
 use crate::scene::SceneDesc;
+use environment::Environment;
 use frame::FrameScene;
 
 /// Everything a backend needs to render one frame.
@@ -32,4 +34,6 @@ pub struct FrameJob<'a> {
     pub spp: u32,
     /// Deepest Whitted recursion (0: primary hits only).
     pub max_depth: u32,
+    /// The background and the ambient sky (both off by default).
+    pub environment: Environment,
 }

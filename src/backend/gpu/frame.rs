@@ -58,7 +58,7 @@ impl Frame<'_> {
         let band_samples = pixels * job.spp as usize;
         let band_start = rows.start as u64 * job.width as u64 * job.spp as u64;
         context.checked("rendering a band", || {
-            let film = Film::new(context, pixels, job.spp as usize)?;
+            let film = Film::new(context, pixels, job.spp as usize, &job.environment)?;
 
             let start = Instant::now();
             let mut level = Vec::new();

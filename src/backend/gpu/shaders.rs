@@ -67,6 +67,7 @@ const VECTOR: &str = include_str!("shaders/vector.wgsl");
 const PATH: &str = include_str!("shaders/path.wgsl");
 const SURFACE_POINT: &str = include_str!("shaders/surface_point.wgsl");
 const SCHLICK: &str = include_str!("shaders/schlick.wgsl");
+const ENVIRONMENT: &str = include_str!("shaders/environment.wgsl");
 /// What the passes that trace share: the world and its traversal.
 const TRACING: [&str; 3] = [
     include_str!("shaders/scene.wgsl"),
@@ -126,10 +127,11 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
             &[
                 VECTOR,
                 SURFACE_POINT,
+                ENVIRONMENT,
                 include_str!("shaders/accumulate.wgsl"),
             ],
         ),
-        Entry::Resolve => (&[], &[include_str!("shaders/resolve.wgsl")]),
+        Entry::Resolve => (&[], &[ENVIRONMENT, include_str!("shaders/resolve.wgsl")]),
     };
     [prelude, COMMON]
         .iter()
@@ -172,6 +174,7 @@ mod tests {
         use crate::accel::flat::{FlatBinaryNode, FlatInstance, FlatWideNode};
         use crate::backend::gpu::camera::CameraRecord;
         use crate::backend::gpu::direct::{DirectLight, FlatLight};
+        use crate::backend::gpu::film::EnvironmentRecord;
         use crate::backend::gpu::scene::Params;
         use crate::backend::gpu::surface::{
             MaterialRecord, MeshRecord, ObjectRecord, PathRay, SurfacePoint, TextureRecord,
@@ -248,6 +251,11 @@ mod tests {
                 vec![0, 12, 16, 28, 32, 44, 48, 52],
             ),
             ("DirectLight", size_of::<DirectLight>(), vec![0, 12]),
+            (
+                "Environment",
+                size_of::<EnvironmentRecord>(),
+                vec![0, 12, 16, 28],
+            ),
         ];
         for (name, size, offsets) in expected {
             let (module, handle, ty) = modules
