@@ -21,7 +21,7 @@ use lmanim::import;
 use lmanim::output::{self, ExrPrecision, FramePattern};
 use lmanim::schedule::{FrameSet, Timeline};
 use lmanim::sequence::{self, Job};
-use lmanim::settings::{BackendKind, LightMeshSettings, Method, Settings};
+use lmanim::settings::{Aov, BackendKind, LightMeshSettings, Method, Settings};
 use lmanim::stats::RunStats;
 use lmanim::study::{self, StudyOptions};
 
@@ -177,6 +177,10 @@ struct RenderArgs {
     /// Put every K-th frame of the run on the contact sheet [default: 1].
     #[arg(long, value_name = "K")]
     sheet_every: Option<u32>,
+    /// Write these layers into each EXR beside the beauty, comma-separated:
+    /// light (one RGB layer per light or group), albedo, normal, depth.
+    #[arg(long, value_name = "LIST")]
+    aovs: Option<String>,
     /// Write 32-bit float EXR channels instead of half floats.
     #[arg(long)]
     exr_float: bool,
@@ -395,6 +399,10 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     settings.contact_sheet = flags.contact_sheet.clone().or(settings.contact_sheet);
     settings.sheet_columns = flags.sheet_columns.unwrap_or(settings.sheet_columns);
     settings.sheet_every = flags.sheet_every.unwrap_or(settings.sheet_every);
+    if let Some(list) = &flags.aovs {
+        settings.aovs = Aov::parse_list(list)
+            .map_err(|fault| Failure::bad_input(anyhow::anyhow!("--aovs {list}: {fault}")))?;
+    }
     if let Some(h) = flags.h {
         let fault = LightMeshSettings::h_fault(h);
         let fault = fault.map(|fault| anyhow::anyhow!("--h {h}: {fault}"));

@@ -15,7 +15,7 @@ use crate::backend::{Backend, BackendError, CpuBackend, RenderError};
 use crate::import::{self, ImportError};
 use crate::lightmesh::persistent::PersistentLightMesh;
 use crate::lightmesh::{LightMesh, LightMeshError};
-use crate::output::{self, ContactSheet, FramePattern, OutputError};
+use crate::output::{self, ContactSheet, FramePattern, OutputError, RenderedFrame};
 use crate::render::frame::{CameraChoice, FrameScene, PlaceError, SceneBounds};
 use crate::render::FrameJob;
 use crate::scene::pose::Pose;
@@ -97,9 +97,9 @@ pub struct Sequence {
     clips: ClipSelection,
     /// The previous frame's placement, to tell what changed.
     previous: Option<FrameScene>,
-    /// The previous frame's image, and whether the frame now placed is the
-    /// same picture (nothing changed), so it is copied.
-    last_image: Option<output::Image>,
+    /// The previous frame's image (and layers), and whether the frame now
+    /// placed is the same picture (nothing changed), so it is copied.
+    last_frame: Option<RenderedFrame>,
     still: bool,
 }
 
@@ -138,7 +138,7 @@ impl Sequence {
             scene_radius,
             clips: ClipSelection::All,
             previous: None,
-            last_image: None,
+            last_frame: None,
             still: false,
         })
     }
@@ -231,9 +231,21 @@ impl Sequence {
         settings: &Settings,
         stats: &mut FrameStats,
     ) -> Result<output::Image, RunError> {
-        if let (true, Some(image)) = (self.still, &self.last_image) {
+        Ok(self.render_frame(backend, placed, settings, stats)?.image)
+    }
+
+    /// Renders one frame with the AOV layers `settings` ask for, filling
+    /// `stats`.
+    pub fn render_frame(
+        &mut self,
+        backend: &mut Backend,
+        placed: &FrameScene,
+        settings: &Settings,
+        stats: &mut FrameStats,
+    ) -> Result<RenderedFrame, RunError> {
+        if let (true, Some(frame)) = (self.still, &self.last_frame) {
             stats.copied = true;
-            return Ok(image.clone());
+            return Ok(frame.clone());
         }
         let light_mesh = if settings.method.uses_light_mesh() {
             let mesh = self
@@ -247,7 +259,7 @@ impl Sequence {
         } else {
             None
         };
-        let image = backend
+        let frame = backend
             .render(
                 &frame_job(&self.scene, &self.world, placed, settings),
                 settings.method,
@@ -265,8 +277,8 @@ impl Sequence {
         if let Some(mesh_stats) = &mut stats.lightmesh {
             mesh_stats.bits_loaded = self.light_mesh.take_bits_loaded();
         }
-        self.last_image = Some(image.clone());
-        Ok(image)
+        self.last_frame = Some(frame.clone());
+        Ok(frame)
     }
 
     /// Renders the placed frame with every light visible from every point,
@@ -289,7 +301,7 @@ fn frame_job<'a>(
     scene: &'a SceneDesc,
     world: &'a World,
     placed: &'a FrameScene,
-    settings: &Settings,
+    settings: &'a Settings,
 ) -> FrameJob<'a> {
     FrameJob {
         scene,
@@ -300,6 +312,7 @@ fn frame_job<'a>(
         spp: settings.spp,
         max_depth: settings.max_depth,
         environment: settings.environment(),
+        aovs: &settings.aovs,
     }
 }
 
@@ -344,17 +357,18 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
             ..FrameStats::default()
         };
         let placed = sequence.advance(timeline.time_of(frame), settings, &mut stats)?;
-        let image = sequence.render(&mut backend, &placed, settings, &mut stats)?;
+        let rendered = sequence.render_frame(&mut backend, &placed, settings, &mut stats)?;
+        let image = &rendered.image;
 
         let write_started = Instant::now();
         let path = job.pattern.path_for(frame);
-        output::write_exr(&path, &image, settings.exr_precision)?;
+        output::write_layered_exr(&path, image, &rendered.aovs, settings.exr_precision)?;
         if settings.png {
             let path = job.pattern.png_path_for(frame);
-            output::write_png_preview(&path, &image, settings.exposure)?;
+            output::write_png_preview(&path, image, settings.exposure)?;
         }
         if let Some((_, sheet)) = &mut sheet {
-            sheet.add(index, frame, &image);
+            sheet.add(index, frame, image);
         }
         stats.add_stage_time("output", write_started.elapsed().as_secs_f64());
         stats.seconds = frame_started.elapsed().as_secs_f64();

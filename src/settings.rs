@@ -69,6 +69,8 @@ pub struct Settings {
     /// diffuse part, unshadowed (`render/environment.rs`); None: no
     /// ambient term.
     pub ambient: Option<[f32; 3]>,
+    /// Layers written into each EXR frame beside the beauty (`--aovs`).
+    pub aovs: Vec<Aov>,
     /// Worker threads; None uses every core.
     pub threads: Option<usize>,
     /// Output frame pattern (`frame.####.exr`); None derives one from the
@@ -102,6 +104,7 @@ impl Default for Settings {
             sheet_every: 1,
             background: None,
             ambient: None,
+            aovs: Vec::new(),
             threads: None,
             out: None,
             cache_dir: Some("cache".into()),
@@ -150,6 +153,53 @@ impl std::fmt::Display for Method {
             Method::Lmm1 => "lmm1",
             Method::Area => "area",
         })
+    }
+}
+
+/// An arbitrary output variable: a layer of the EXR frames beside the
+/// beauty (`R`, `G`, `B`, `A`), for compositing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Aov {
+    /// One RGB layer per light, or per group of lights (`extras.group`):
+    /// `light.<name>.R/G/B`, with `other.R/G/B` for what no light sent
+    /// (emission, the ambient sky, the background); together they sum to
+    /// the beauty.
+    Light,
+    /// The base colour of what the camera sees (`albedo.R/G/B`).
+    Albedo,
+    /// Its shading normal in world space (`N.X/Y/Z`).
+    Normal,
+    /// Its distance in metres along the camera ray (`Z`; infinite where
+    /// the ray meets nothing).
+    Depth,
+}
+
+impl Aov {
+    pub const ALL: [Aov; 4] = [Aov::Light, Aov::Albedo, Aov::Normal, Aov::Depth];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Aov::Light => "light",
+            Aov::Albedo => "albedo",
+            Aov::Normal => "normal",
+            Aov::Depth => "depth",
+        }
+    }
+
+    /// A comma-separated list such as `light,depth`, or why it is not one.
+    pub fn parse_list(text: &str) -> Result<Vec<Aov>, String> {
+        let mut aovs = Vec::new();
+        for item in text.split(',').map(str::trim) {
+            let aov = (Aov::ALL.into_iter())
+                .find(|aov| aov.name() == item)
+                .ok_or_else(|| {
+                    let known: Vec<&str> = Aov::ALL.iter().map(|aov| aov.name()).collect();
+                    format!("unknown AOV '{item}'; the AOVs are {}", known.join(", "))
+                })?;
+            aovs.push(aov);
+        }
+        Ok(aovs)
     }
 }
 
@@ -324,6 +374,16 @@ impl Settings {
                 "method {} runs on backend cpu only: backend gpu renders whitted and area",
                 self.method
             ));
+        }
+        if let Some(aov) =
+            (self.aovs.iter()).find(|&&aov| self.aovs.iter().filter(|&&a| a == aov).count() > 1)
+        {
+            return Err(format!("aovs lists {} twice", aov.name()));
+        }
+        if self.backend == BackendKind::Gpu && !self.aovs.is_empty() {
+            return Err(
+                "aovs are written by backend cpu only: backend gpu writes the beauty".into(),
+            );
         }
         if self.threads == Some(0) {
             return Err("threads is 0; leave it out to use every core".into());

@@ -219,6 +219,7 @@ fn lights_around(centre: Vec3) -> Vec<RenderLight> {
         intensity,
         range,
         radius: None,
+        group: None,
     };
     let centre = centre.as_dvec3();
     // Spots and directional lights shine down −Z of their node.
@@ -429,6 +430,7 @@ fn denormal_terms_are_the_cpus_or_flushed() {
             intensity,
             range: None,
             radius: None,
+            group: None,
         };
         RenderLight::place(&light, DMat4::from_translation(at), DVec3::ZERO, 0.0)
     };
@@ -758,6 +760,7 @@ fn shading_points_made_on_the_gpu_are_the_cpus() {
                 spp: 1,
                 max_depth: settings.max_depth,
                 environment: settings.environment(),
+                aovs: &[],
             };
             let gpu_points = gpu.shading_points(&job, &rays).expect("GPU points");
             let mut hits = 0;

@@ -9,6 +9,7 @@ pub mod environment;
 pub mod frame;
 pub mod lanes;
 pub mod light;
+pub mod light_terms;
 pub mod material;
 pub mod omega;
 pub mod scatter;
@@ -18,6 +19,7 @@ pub mod whitted;
 
 use crate::accel::World;
 use crate::scene::SceneDesc;
+use crate::settings::Aov;
 use environment::Environment;
 use frame::FrameScene;
 
@@ -36,4 +38,6 @@ pub struct FrameJob<'a> {
     pub max_depth: u32,
     /// The background and the ambient sky (both off by default).
     pub environment: Environment,
+    /// The AOV layers to make beside the beauty (the CPU backend's).
+    pub aovs: &'a [Aov],
 }

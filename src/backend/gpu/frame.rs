@@ -209,7 +209,7 @@ impl Frame<'_> {
                     if let Some(point) = record.shading_point() {
                         let sample = band_start + point.sample as u64;
                         let lamp = |light| lamp_sample(sample, job.spp, light, point.depth);
-                        area::light_samples(&point, &job.frame.lights, lamp, |s| {
+                        area::light_samples(&point, &job.frame.lights, lamp, |_, s| {
                             samples.values.push(s.value);
                             samples.rays.push(s.shadow_ray);
                         });
