@@ -181,6 +181,10 @@ struct RenderArgs {
     /// light (one RGB layer per light or group), albedo, normal, depth.
     #[arg(long, value_name = "LIST")]
     aovs: Option<String>,
+    /// A quick look: a quarter of the width and height, LMM1 on a coarse
+    /// lattice, PNG frames only (other flags still override).
+    #[arg(long)]
+    preview: bool,
     /// Write 32-bit float EXR channels instead of half floats.
     #[arg(long)]
     exr_float: bool,
@@ -383,6 +387,9 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
         Some(path) => Settings::load(path).map_err(Failure::bad_input)?,
         None => Settings::default(),
     };
+    if cli.preview {
+        settings = settings.preview();
+    }
     let flags = cli;
     settings.fps = flags.fps.unwrap_or(settings.fps);
     settings.method = flags.method.unwrap_or(settings.method);

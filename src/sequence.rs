@@ -362,7 +362,9 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
 
         let write_started = Instant::now();
         let path = job.pattern.path_for(frame);
-        output::write_layered_exr(&path, image, &rendered.aovs, settings.exr_precision)?;
+        if settings.exr {
+            output::write_layered_exr(&path, image, &rendered.aovs, settings.exr_precision)?;
+        }
         if settings.png {
             let path = job.pattern.png_path_for(frame);
             output::write_png_preview(&path, image, settings.exposure)?;

@@ -18,6 +18,13 @@ use crate::render::environment::Environment;
 /// longer fits a sensible amount of memory (and EXR viewers choke).
 pub const MAX_DIMENSION: u32 = 32768;
 
+/// The coarsest derived lattice accepted (h·kI/R): beyond it one node's
+/// mask stands for a whole lamp's shadow.
+pub const MAX_COARSENESS: f32 = 16.0;
+
+/// The `--preview` preset's share of the settings' width and height.
+pub const PREVIEW_SCALE: u32 = 4;
+
 /// The deepest Whitted recursion accepted; deeper only costs time.
 pub const MAX_DEPTH: u32 = 64;
 /// Most thumbnails in a contact sheet's row: the sheet is one frame wide,
@@ -50,6 +57,8 @@ pub struct Settings {
     /// Animation clip to play (name or index); None plays all together.
     pub clip: Option<String>,
     pub exr_precision: ExrPrecision,
+    /// Write the EXR frames (`--preview` turns them off: PNG only).
+    pub exr: bool,
     /// Also write a tone-mapped PNG preview of every frame.
     pub png: bool,
     /// Exposure of the PNG previews and the contact sheet, in stops (EV):
@@ -97,6 +106,7 @@ impl Default for Settings {
             camera: None,
             clip: None,
             exr_precision: ExrPrecision::Half,
+            exr: true,
             png: false,
             exposure: 0.0,
             contact_sheet: None,
@@ -237,6 +247,10 @@ pub struct LightMeshSettings {
     pub h: Option<f32>,
     /// Interpolation radius in units of `h` (the paper's kI).
     pub ki: f32,
+    /// h·kI/R of the lattice derived from the lamps when `h` is None: 1
+    /// makes the light mesh's transition the penumbra of an occluder
+    /// halfway to the lamp; more makes the lattice coarser and faster.
+    pub coarseness: f32,
     /// Memory the node masks may take, in MiB; a frame that would need
     /// more is refused with a clear error instead of exhausting memory.
     pub max_memory_mib: usize,
@@ -247,6 +261,7 @@ impl Default for LightMeshSettings {
         LightMeshSettings {
             h: None,
             ki: 2.5,
+            coarseness: 1.0,
             max_memory_mib: 4096,
         }
     }
@@ -286,6 +301,30 @@ pub enum SettingsError {
 }
 
 impl Settings {
+    /// The `--preview` preset over these settings: a quarter of the width
+    /// and height, one sample a pixel, LMM1 on a coarse lattice (kI = 2.1,
+    /// h·kI/R = 1.5: a point on the accuracy study's Pareto front, see
+    /// STUDY.md) and PNG frames only.
+    pub fn preview(self) -> Settings {
+        Settings {
+            width: (self.width / PREVIEW_SCALE).max(1),
+            height: (self.height / PREVIEW_SCALE).max(1),
+            spp: 1,
+            method: Method::Lmm1,
+            backend: BackendKind::Cpu,
+            exr: false,
+            png: true,
+            aovs: Vec::new(),
+            lightmesh: LightMeshSettings {
+                h: None,
+                ki: 2.1,
+                coarseness: 1.5,
+                ..self.lightmesh
+            },
+            ..self
+        }
+    }
+
     /// The frame's background and ambient sky as the renderer takes them.
     pub fn environment(&self) -> Environment {
         Environment {
@@ -375,6 +414,15 @@ impl Settings {
                 self.method
             ));
         }
+        if !self.exr && !self.aovs.is_empty() {
+            return Err("aovs go into the EXR frames, and exr is false".into());
+        }
+        if !self.exr && !self.png && self.contact_sheet.is_none() {
+            return Err(
+                "exr and png are false and there is no contact_sheet: the run would write nothing"
+                    .into(),
+            );
+        }
         if let Some(aov) =
             (self.aovs.iter()).find(|&&aov| self.aovs.iter().filter(|&&a| a == aov).count() > 1)
         {
@@ -391,6 +439,12 @@ impl Settings {
         let lightmesh = &self.lightmesh;
         if let Some(fault) = LightMeshSettings::ki_fault(lightmesh.ki) {
             return Err(format!("lightmesh.ki is {}; {fault}", lightmesh.ki));
+        }
+        if !(lightmesh.coarseness > 0.0 && lightmesh.coarseness <= MAX_COARSENESS) {
+            return Err(format!(
+                "lightmesh.coarseness is {}; it must be above 0 and at most {MAX_COARSENESS}",
+                lightmesh.coarseness
+            ));
         }
         if let Some((h, fault)) =
             (lightmesh.h).and_then(|h| Some((h, LightMeshSettings::h_fault(h)?)))
