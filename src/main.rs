@@ -177,6 +177,11 @@ struct RenderArgs {
     /// Put every K-th frame of the run on the contact sheet [default: 1].
     #[arg(long, value_name = "K")]
     sheet_every: Option<u32>,
+    /// The frames the contact sheet is over (e.g. the whole shot, `0..240`);
+    /// those this run does not render are read back from their EXR files
+    /// [default: the run's frames].
+    #[arg(long, value_name = "RANGE")]
+    sheet_frames: Option<String>,
     /// Write these layers into each EXR beside the beauty, comma-separated:
     /// light (one RGB layer per light or group), albedo, normal, depth.
     #[arg(long, value_name = "LIST")]
@@ -406,6 +411,7 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     settings.contact_sheet = flags.contact_sheet.clone().or(settings.contact_sheet);
     settings.sheet_columns = flags.sheet_columns.unwrap_or(settings.sheet_columns);
     settings.sheet_every = flags.sheet_every.unwrap_or(settings.sheet_every);
+    settings.sheet_frames = flags.sheet_frames.clone().or(settings.sheet_frames);
     if let Some(list) = &flags.aovs {
         settings.aovs = Aov::parse_list(list)
             .map_err(|fault| Failure::bad_input(anyhow::anyhow!("--aovs {list}: {fault}")))?;

@@ -15,7 +15,7 @@ use crate::backend::{Backend, BackendError, CpuBackend, RenderError};
 use crate::import::{self, ImportError};
 use crate::lightmesh::persistent::PersistentLightMesh;
 use crate::lightmesh::{LightMesh, LightMeshError};
-use crate::output::{self, ContactSheet, FramePattern, OutputError, RenderedFrame};
+use crate::output::{self, FramePattern, OutputError, RenderedFrame, ShotSheet};
 use crate::render::frame::{CameraChoice, FrameScene, PlaceError, SceneBounds};
 use crate::render::FrameJob;
 use crate::scene::pose::Pose;
@@ -41,6 +41,8 @@ pub enum RunError {
     Clip { file: String, fault: String },
     #[error("the output pattern '{0}' has no '#' placeholder, so several frames would overwrite one file")]
     PatternWithoutPlaceholder(String),
+    #[error("sheet_frames: {0}")]
+    SheetFrames(String),
     #[error(transparent)]
     Output(#[from] OutputError),
     #[error(transparent)]
@@ -58,6 +60,7 @@ impl RunError {
                 | RunError::LightMesh { .. }
                 | RunError::Clip { .. }
                 | RunError::PatternWithoutPlaceholder(_)
+                | RunError::SheetFrames(_)
         )
     }
 }
@@ -316,6 +319,19 @@ fn frame_job<'a>(
     }
 }
 
+/// The contact sheet `settings` ask for at `path`: over `sheet_frames`
+/// when given, else over the run's `frames`.
+fn shot_sheet(path: &Path, settings: &Settings, frames: &FrameSet) -> Result<ShotSheet, RunError> {
+    let sheet_frames = match &settings.sheet_frames {
+        Some(text) => {
+            FrameSet::parse(text).map_err(|fault| RunError::SheetFrames(fault.to_string()))?
+        }
+        None => frames.clone(),
+    };
+    let (columns, every) = (settings.sheet_columns, settings.sheet_every);
+    Ok(ShotSheet::new(path, sheet_frames.frames(), columns, every))
+}
+
 /// Renders every frame of `job`, writing each as it is done, and reports
 /// each to `on_frame`.
 pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, RunError> {
@@ -344,12 +360,10 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
         ..RunStats::default()
     };
     let timeline = Timeline { fps: settings.fps };
-    let mut sheet = (settings.contact_sheet.as_ref()).map(|path| {
-        (
-            path,
-            ContactSheet::new(settings.sheet_columns, settings.sheet_every),
-        )
-    });
+    let mut sheet = match &settings.contact_sheet {
+        Some(path) => Some(shot_sheet(Path::new(path), settings, job.frames)?),
+        None => None,
+    };
     for (index, &frame) in job.frames.frames().iter().enumerate() {
         let frame_started = Instant::now();
         let mut stats = FrameStats {
@@ -369,8 +383,8 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
             let path = job.pattern.png_path_for(frame);
             output::write_png_preview(&path, image, settings.exposure)?;
         }
-        if let Some((_, sheet)) = &mut sheet {
-            sheet.add(index, frame, image);
+        if let Some(sheet) = &mut sheet {
+            sheet.add_rendered(frame, image);
         }
         stats.add_stage_time("output", write_started.elapsed().as_secs_f64());
         stats.seconds = frame_started.elapsed().as_secs_f64();
@@ -391,8 +405,10 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
     if let Err(error) = sequence.save_cache() {
         log::warn!("{error}; the light-mesh cache was not saved");
     }
-    if let Some((path, sheet)) = &sheet {
-        sheet.write(Path::new(path), settings.exposure)?;
+    if let Some(sheet) = sheet {
+        for unread in sheet.finish(job.pattern, settings.exposure)? {
+            log::warn!("{unread}; the contact sheet leaves that frame out");
+        }
     }
     run.total_seconds = started.elapsed().as_secs_f64();
     Ok(run)

@@ -13,6 +13,7 @@ use serde::{Deserialize, Serialize};
 use crate::lightmesh::lattice::MAX_KI;
 use crate::output::ExrPrecision;
 use crate::render::environment::Environment;
+use crate::schedule::FrameSet;
 
 /// The largest width or height accepted: beyond it a frame buffer no
 /// longer fits a sensible amount of memory (and EXR viewers choke).
@@ -69,8 +70,12 @@ pub struct Settings {
     pub contact_sheet: Option<String>,
     /// Thumbnails per row of the contact sheet.
     pub sheet_columns: u32,
-    /// The sheet shows every this many-th frame of the run.
+    /// The sheet shows every this many-th frame of its frames.
     pub sheet_every: u32,
+    /// The frames of the shot the sheet is over (a frame range such as
+    /// `0..240`); those the run does not render are read back from their
+    /// EXR files. None: the run's frames.
+    pub sheet_frames: Option<String>,
     /// Linear RGB radiance of the pixels where camera rays meet nothing,
     /// which makes frames opaque; None leaves them transparent black.
     pub background: Option<[f32; 3]>,
@@ -112,6 +117,7 @@ impl Default for Settings {
             contact_sheet: None,
             sheet_columns: 6,
             sheet_every: 1,
+            sheet_frames: None,
             background: None,
             ambient: None,
             aovs: Vec::new(),
@@ -404,6 +410,9 @@ impl Settings {
                     "{name} is {colour:?}; it must be three finite, non-negative radiances (linear RGB)"
                 ));
             }
+        }
+        if let Some(Err(fault)) = self.sheet_frames.as_deref().map(FrameSet::parse) {
+            return Err(format!("sheet_frames: {fault}"));
         }
         if self.sheet_every == 0 {
             return Err("sheet_every is 0; it must be at least 1".into());

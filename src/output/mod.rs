@@ -11,6 +11,7 @@ mod exr;
 mod label;
 mod pattern;
 mod png;
+mod shot_sheet;
 
 pub use atomic::write_atomically;
 pub use contact_sheet::ContactSheet;
@@ -19,6 +20,7 @@ pub use exr::{read_exr, write_exr, write_layered_exr};
 pub use label::FONT;
 pub use pattern::FramePattern;
 pub use png::{tone_map, write_png_preview, write_srgb_png};
+pub use shot_sheet::ShotSheet;
 
 use glam::Vec4;
 
