@@ -147,10 +147,17 @@ impl AovFrame {
         terms: &[T],
         chunk: usize,
     ) {
+        let camera_hits = &points[..primary];
+        let samples = ((rows.end - rows.start) * job.width * job.spp) as usize;
+        let mut covered = vec![false; samples];
+        for point in camera_hits {
+            covered[point.sample as usize] = true;
+        }
         let band = Band {
             job,
             rows,
-            camera_hits: &points[..primary],
+            camera_hits,
+            covered,
         };
         let mut layers = self.layers.iter_mut();
         for aov in &self.aovs {
@@ -202,11 +209,13 @@ struct Band<'a> {
     job: &'a FrameJob<'a>,
     rows: std::ops::Range<u32>,
     camera_hits: &'a [ShadingPoint],
+    /// Whether each sample's camera ray hit something.
+    covered: Vec<bool>,
 }
 
 impl Band<'_> {
     fn samples(&self) -> usize {
-        ((self.rows.end - self.rows.start) * self.job.width * self.job.spp) as usize
+        self.covered.len()
     }
 
     /// Per sample, `value` of its camera hit (zero where it has none).
@@ -245,11 +254,10 @@ impl Band<'_> {
     /// Appends each pixel's mean of `value(sample, covered)` over its
     /// samples to `out`.
     fn resolve_mean(&self, out: &mut AovLayer, value: impl Fn(usize, bool) -> Vec3) {
-        let covered = self.covered();
         let spp = self.job.spp as usize;
         for pixel in 0..self.samples() / spp {
             let samples = pixel * spp..(pixel + 1) * spp;
-            let sum: Vec3 = samples.map(|s| value(s, covered[s])).sum();
+            let sum: Vec3 = samples.map(|s| value(s, self.covered[s])).sum();
             out.values.extend((sum / spp as f32).to_array());
         }
     }
@@ -269,15 +277,6 @@ impl Band<'_> {
             *nearest = nearest.min(distance);
         }
         out.values.extend(depth);
-    }
-
-    /// Whether each sample's camera ray hit something.
-    fn covered(&self) -> Vec<bool> {
-        let mut covered = vec![false; self.samples()];
-        for point in self.camera_hits {
-            covered[point.sample as usize] = true;
-        }
-        covered
     }
 }
 
