@@ -174,9 +174,10 @@ impl AovFrame {
                         let other = layer == count - 1;
                         band.resolve_mean(out, |sample, covered| {
                             let value = sent[sample * count + layer];
-                            match other {
-                                true => job.environment.sample_radiance(value, covered),
-                                false => value,
+                            if other {
+                                job.environment.sample_radiance(value, covered)
+                            } else {
+                                value
                             }
                         });
                     }
