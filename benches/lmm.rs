@@ -12,7 +12,9 @@
 //! `cargo bench --bench lmm` prints Markdown tables (BENCHMARKS.md keeps
 //! them). `LMANIM_BENCH_QUICK=1` runs 480p only; `LMANIM_BENCH_LAMPS=64`
 //! and `LMANIM_BENCH_HEIGHT=1080` run one lamp count and one size (and
-//! skip the kI table), for profiling one case.
+//! skip the kI table), for profiling one case. `LMANIM_BENCH_BACKEND=gpu`
+//! runs the matrix on the GPU backend (the adapter is printed: a software
+//! one's timings say nothing of a GPU's).
 
 use std::path::Path;
 use std::time::Instant;
@@ -36,9 +38,16 @@ fn main() {
         })
         .collect();
     let dir = tempfile::tempdir().expect("temporary directory");
-    let mut backend = lmanim::backend::Backend::new(lmanim::settings::BackendKind::Cpu, None)
-        .expect("thread pool");
+    let kind = match std::env::var("LMANIM_BENCH_BACKEND").as_deref() {
+        Ok("gpu") => lmanim::settings::BackendKind::Gpu,
+        Ok("cpu") | Err(_) => lmanim::settings::BackendKind::Cpu,
+        Ok(other) => panic!("LMANIM_BENCH_BACKEND is cpu or gpu, not {other}"),
+    };
+    let mut backend = lmanim::backend::Backend::new(kind, None).expect("backend");
     println!("threads: {}", backend.threads());
+    if let Some(adapter) = backend.adapter() {
+        println!("adapter: {adapter}");
+    }
     let mut stage_rows = Vec::new();
     // The 64-lamp LMM1 case at the largest size, for the lattice sweep.
     let mut coarser = None;

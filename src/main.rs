@@ -49,6 +49,10 @@ enum Command {
     /// Measure error against time on one frame: a reference, then every
     /// method over its settings, with tables and plots in --out.
     Study(StudyArgs),
+    /// Compute the light mesh's masks that the frames will need and save
+    /// them to the disk cache, without rendering: a farm job's first task,
+    /// so that its render tasks start warm. Takes a render's arguments.
+    Warm(RenderArgs),
 }
 
 #[derive(Debug, Args)]
@@ -243,6 +247,10 @@ fn main() -> ExitCode {
         (Some(Command::Study(args)), _) => {
             init_logging(args.quiet);
             run_study(args)
+        }
+        (Some(Command::Warm(args)), _) => {
+            init_logging(args.quiet);
+            run_warm(args)
         }
         (None, Some(render)) => {
             init_logging(render.quiet);
@@ -441,6 +449,32 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
 }
 
 /// `lmanim inspect`: the scene posed at the chosen times, as JSON on stdout.
+fn run_warm(cli: &RenderArgs) -> Result<(), Failure> {
+    let settings = resolve_settings(cli)?;
+    let frames = FrameSet::parse(&cli.frames)
+        .map_err(|fault| Failure::bad_input(anyhow::anyhow!("--frames {}: {fault}", cli.frames)))?;
+    let pattern = FramePattern::parse(&default_pattern(&cli.scene))
+        .map_err(|fault| Failure::bad_input(anyhow::anyhow!("{fault}")))?;
+    let job = Job {
+        scene_path: &cli.scene,
+        settings: &settings,
+        frames: &frames,
+        pattern: &pattern,
+    };
+    let warm = sequence::warm(&job).map_err(|error| Failure {
+        bad_input: error.is_bad_input(),
+        error: error.into(),
+    })?;
+    if !cli.quiet {
+        let cache = settings.cache_dir.as_deref().unwrap_or_default();
+        eprintln!(
+            "warmed {} frame(s) in {:.2} s: {} mask bits computed, {} loaded; cache {cache}",
+            warm.frames, warm.seconds, warm.bits_computed, warm.bits_loaded
+        );
+    }
+    Ok(())
+}
+
 fn run_inspect(args: &InspectArgs) -> Result<(), Failure> {
     // The error's own line names the file and the fault; its sources
     // would only repeat them.

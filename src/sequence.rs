@@ -21,7 +21,7 @@ use crate::render::FrameJob;
 use crate::scene::pose::Pose;
 use crate::scene::SceneDesc;
 use crate::schedule::{FrameDelta, FrameSet, Timeline};
-use crate::settings::Settings;
+use crate::settings::{Method, Settings};
 use crate::stats::{FrameStats, RunStats};
 
 /// Why a run stopped. `is_bad_input` separates the user's mistakes (exit
@@ -49,6 +49,10 @@ pub enum RunError {
     Backend(#[from] BackendError),
     #[error(transparent)]
     Render(RenderError),
+    #[error("warm fills the light mesh's disk cache, and --method {0} has no light mesh (use lmm or lmm1)")]
+    WarmWithoutLightMesh(Method),
+    #[error("warm fills the light mesh's disk cache, and --no-cache leaves it none to fill")]
+    WarmWithoutCache,
 }
 
 impl RunError {
@@ -61,6 +65,8 @@ impl RunError {
                 | RunError::Clip { .. }
                 | RunError::PatternWithoutPlaceholder(_)
                 | RunError::SheetFrames(_)
+                | RunError::WarmWithoutLightMesh(_)
+                | RunError::WarmWithoutCache
         )
     }
 }
@@ -250,38 +256,47 @@ impl Sequence {
             stats.copied = true;
             return Ok(frame.clone());
         }
+        let file = &self.scene_file;
         let light_mesh = if settings.method.uses_light_mesh() {
-            let mesh = self
-                .light_mesh
-                .prepare(&placed.lights, &settings.lightmesh, self.scene_radius)
-                .map_err(|source| RunError::LightMesh {
-                    file: self.scene_file.clone(),
-                    source,
-                })?;
-            Some(mesh)
+            let mesh = &mut self.light_mesh;
+            Some(prepared_light_mesh(
+                mesh,
+                file,
+                self.scene_radius,
+                placed,
+                settings,
+            )?)
         } else {
             None
         };
-        let frame = backend
-            .render(
-                &frame_job(&self.scene, &self.world, placed, settings),
-                settings.method,
-                light_mesh,
-                stats,
-            )
-            .map_err(|error| match error {
-                RenderError::LightMesh(source) => RunError::LightMesh {
-                    file: self.scene_file.clone(),
-                    source,
-                },
-                RenderError::Gpu(error) => RunError::Backend(error.into()),
-                error @ RenderError::NoLightMesh(_) => RunError::Render(error),
-            })?;
+        let job = frame_job(&self.scene, &self.world, placed, settings);
+        let frame = (backend.render(&job, settings.method, light_mesh, stats))
+            .map_err(|error| run_error(file, error))?;
         if let Some(mesh_stats) = &mut stats.lightmesh {
             mesh_stats.bits_loaded = self.light_mesh.take_bits_loaded();
         }
         self.last_frame = Some(frame.clone());
         Ok(frame)
+    }
+
+    /// Computes the light-mesh masks the placed frame will need, without
+    /// shading it (`lmanim warm`), filling `stats`.
+    pub fn warm(
+        &mut self,
+        backend: &mut Backend,
+        placed: &FrameScene,
+        settings: &Settings,
+        stats: &mut FrameStats,
+    ) -> Result<(), RunError> {
+        let file = &self.scene_file;
+        let mesh = &mut self.light_mesh;
+        let mesh = prepared_light_mesh(mesh, file, self.scene_radius, placed, settings)?;
+        let job = frame_job(&self.scene, &self.world, placed, settings);
+        (backend.warm(&job, mesh, stats)).map_err(|error| run_error(file, error))?;
+        if let Some(mesh_stats) = &mut stats.lightmesh {
+            mesh_stats.bits_loaded = self.light_mesh.take_bits_loaded();
+        }
+        Ok(())
     }
 
     /// Renders the placed frame with every light visible from every point,
@@ -300,6 +315,37 @@ impl Sequence {
 }
 
 /// What the backend needs to render `placed` with `settings`.
+/// The light mesh for the placed frame's lights, made (and loaded from
+/// the disk cache) by the first frame that needs it; `file` names the
+/// scene in errors.
+fn prepared_light_mesh<'m>(
+    light_mesh: &'m mut PersistentLightMesh,
+    file: &str,
+    scene_radius: f32,
+    placed: &FrameScene,
+    settings: &Settings,
+) -> Result<&'m mut LightMesh, RunError> {
+    (light_mesh)
+        .prepare(&placed.lights, &settings.lightmesh, scene_radius)
+        .map_err(|source| RunError::LightMesh {
+            file: file.to_owned(),
+            source,
+        })
+}
+
+/// A backend's refusal as the run's error, naming the scene `file` where
+/// the scene is at fault.
+fn run_error(file: &str, error: RenderError) -> RunError {
+    match error {
+        RenderError::LightMesh(source) => RunError::LightMesh {
+            file: file.to_owned(),
+            source,
+        },
+        RenderError::Gpu(error) => RunError::Backend(error.into()),
+        error @ RenderError::NoLightMesh(_) => RunError::Render(error),
+    }
+}
+
 fn frame_job<'a>(
     scene: &'a SceneDesc,
     world: &'a World,
@@ -332,17 +378,12 @@ fn shot_sheet(path: &Path, settings: &Settings, frames: &FrameSet) -> Result<Sho
     Ok(ShotSheet::new(path, sheet_frames.frames(), columns, every))
 }
 
-/// Renders every frame of `job`, writing each as it is done, and reports
-/// each to `on_frame`.
-pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, RunError> {
-    let started = Instant::now();
+/// The backend and the loaded scene `job` runs on, with its disk cache and
+/// clips set.
+fn open(job: &Job) -> Result<(Backend, Sequence), RunError> {
     let settings = job.settings;
-    if job.frames.len() > 1 && !job.pattern.has_placeholder() {
-        return Err(RunError::PatternWithoutPlaceholder(
-            job.pattern.path_for(0).display().to_string(),
-        ));
-    }
     let mut backend = Backend::new(settings.backend, settings.threads)?;
+    backend.limit_mask_memory(settings.lightmesh.gpu_memory_mib.saturating_mul(1 << 20));
     let mut sequence = Sequence::load(job.scene_path)?;
     sequence.set_cache_dir(settings.cache_dir.as_ref().map(PathBuf::from));
     if let Some(clip) = &settings.clip {
@@ -353,6 +394,64 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
             })?;
         sequence.set_clips(clips);
     }
+    Ok((backend, sequence))
+}
+
+/// What warming the disk cache did (`lmanim warm`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct WarmStats {
+    pub frames: usize,
+    /// (node, light) bits computed, and taken from the cache at the start.
+    pub bits_computed: u64,
+    pub bits_loaded: u64,
+    pub seconds: f64,
+}
+
+/// Computes the light-mesh masks `job`'s frames will need, frame by frame,
+/// without shading or writing any, and saves their static layer to the
+/// disk cache: the first task of a farm job, so that the render tasks
+/// start warm. Refuses a job without a cache or whose method has no light
+/// mesh.
+pub fn warm(job: &Job) -> Result<WarmStats, RunError> {
+    let started = Instant::now();
+    let settings = job.settings;
+    if !settings.method.uses_light_mesh() {
+        return Err(RunError::WarmWithoutLightMesh(settings.method));
+    }
+    if settings.cache_dir.is_none() {
+        return Err(RunError::WarmWithoutCache);
+    }
+    let (mut backend, mut sequence) = open(job)?;
+    let timeline = Timeline { fps: settings.fps };
+    let mut warm = WarmStats::default();
+    for &frame in job.frames.frames() {
+        let mut stats = FrameStats {
+            frame,
+            ..FrameStats::default()
+        };
+        let placed = sequence.advance(timeline.time_of(frame), settings, &mut stats)?;
+        sequence.warm(&mut backend, &placed, settings, &mut stats)?;
+        let mesh = stats.lightmesh.unwrap_or_default();
+        warm.frames += 1;
+        warm.bits_computed += mesh.bits_computed;
+        warm.bits_loaded += mesh.bits_loaded;
+    }
+    sequence.save_cache()?;
+    warm.seconds = started.elapsed().as_secs_f64();
+    Ok(warm)
+}
+
+/// Renders every frame of `job`, writing each as it is done, and reports
+/// each to `on_frame`.
+pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, RunError> {
+    let started = Instant::now();
+    let settings = job.settings;
+    if job.frames.len() > 1 && !job.pattern.has_placeholder() {
+        return Err(RunError::PatternWithoutPlaceholder(
+            job.pattern.path_for(0).display().to_string(),
+        ));
+    }
+    let (mut backend, mut sequence) = open(job)?;
     let mut run = RunStats {
         threads: backend.threads(),
         method: settings.method.to_string(),

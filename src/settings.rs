@@ -260,6 +260,10 @@ pub struct LightMeshSettings {
     /// Memory the node masks may take, in MiB; a frame that would need
     /// more is refused with a clear error instead of exhausting memory.
     pub max_memory_mib: usize,
+    /// GPU memory the resident masks may take, in MiB (`--backend gpu`):
+    /// bricks no level reads are evicted first, and a level that reads
+    /// more is refused with the same clear error.
+    pub gpu_memory_mib: usize,
 }
 
 impl Default for LightMeshSettings {
@@ -269,6 +273,7 @@ impl Default for LightMeshSettings {
             ki: 2.5,
             coarseness: 1.0,
             max_memory_mib: 4096,
+            gpu_memory_mib: 1024,
         }
     }
 }
@@ -317,7 +322,6 @@ impl Settings {
             height: (self.height / PREVIEW_SCALE).max(1),
             spp: 1,
             method: Method::Lmm1,
-            backend: BackendKind::Cpu,
             exr: false,
             png: true,
             aovs: Vec::new(),
@@ -417,12 +421,6 @@ impl Settings {
         if self.sheet_every == 0 {
             return Err("sheet_every is 0; it must be at least 1".into());
         }
-        if self.backend == BackendKind::Gpu && self.method.uses_light_mesh() {
-            return Err(format!(
-                "method {} runs on backend cpu only: backend gpu renders whitted and area",
-                self.method
-            ));
-        }
         if !self.exr && !self.aovs.is_empty() {
             return Err("aovs go into the EXR frames, and exr is false".into());
         }
@@ -446,6 +444,9 @@ impl Settings {
             return Err("threads is 0; leave it out to use every core".into());
         }
         let lightmesh = &self.lightmesh;
+        if lightmesh.gpu_memory_mib == 0 {
+            return Err("lightmesh.gpu_memory_mib is 0; it must be at least 1".into());
+        }
         if let Some(fault) = LightMeshSettings::ki_fault(lightmesh.ki) {
             return Err(format!("lightmesh.ki is {}; {fault}", lightmesh.ki));
         }

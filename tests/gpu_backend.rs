@@ -20,10 +20,16 @@ mod common;
 
 use std::path::Path;
 
+use glam::IVec3;
 use glam::{Affine3A, DMat4, DQuat, DVec3, Quat, Vec2, Vec3};
 use lmanim::accel::{Hit, Ray, World, WorldObject};
+use lmanim::backend::gpu::mask_pool::MaskPool;
 use lmanim::backend::gpu::{FrameLights, GpuError};
-use lmanim::backend::GpuBackend;
+use lmanim::backend::{Backend, GpuBackend};
+use lmanim::lightmesh::demand::{BrickDemand, Demand};
+use lmanim::lightmesh::lattice::Lattice;
+use lmanim::lightmesh::masks::BRICK_NODES;
+use lmanim::lightmesh::{LightMesh, LightMeshStats};
 use lmanim::output::{read_exr, Image};
 use lmanim::render::frame::FrameScene;
 use lmanim::render::light::RenderLight;
@@ -37,23 +43,13 @@ use lmanim::scene::SceneDesc;
 use lmanim::scene::{Light, LightKind};
 use lmanim::schedule::FrameDelta;
 use lmanim::sequence::Sequence;
-use lmanim::settings::Settings;
+use lmanim::settings::{BackendKind, Method, Settings};
+use lmanim::stats::FrameStats;
+use lmanim_authoring::city::{city_block, CityParams};
 
 use anim_support::lmanim;
 use common::cube;
-
-/// The GPU backend, or None (with the reason on stderr) off CI when no
-/// adapter exists.
-fn gpu() -> Option<GpuBackend> {
-    match GpuBackend::new(Some(2)) {
-        Ok(gpu) => Some(gpu),
-        Err(error) if std::env::var_os("CI").is_none() => {
-            eprintln!("skipped: {error}");
-            None
-        }
-        Err(error) => panic!("CI must have a GPU adapter (mesa-vulkan-drivers): {error}"),
-    }
-}
+use common::gpu::backend as gpu;
 
 /// Rays from `origins` at every vertex and edge midpoint of the placed
 /// mesh (ties on shared edges and vertices by construction), and the same
@@ -585,7 +581,7 @@ fn background_and_ambient_sky_match_the_cpu() {
     )
     .expect("write settings");
     let settings = settings.to_str().expect("UTF-8 path");
-    for method in ["whitted", "area"] {
+    for method in ["whitted", "area", "lmm1"] {
         let args = [
             "--method", method, "--spp", "2", "--width", "40", "--height", "24",
         ];
@@ -860,20 +856,363 @@ fn no_adapter_is_one_clear_line_and_exit_1() {
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
+/// The light-mesh methods on `--backend gpu` from the command line: the
+/// frame is written, and the run reports the adapter it ran on.
 #[test]
-fn light_mesh_methods_on_the_gpu_are_refused_before_any_work() {
+fn light_mesh_methods_render_on_the_gpu_from_the_command_line() {
+    if gpu().is_none() {
+        return;
+    }
     let dir = tempfile::tempdir().expect("tempdir");
     let scene = sample("courtyard.gltf");
-    let run = lmanim(
-        &[
-            scene.to_str().expect("UTF-8"),
-            "--backend",
-            "gpu",
-            "--method",
-            "lmm1",
-        ],
-        dir.path(),
+    let args = [
+        scene.to_str().expect("UTF-8"),
+        "--backend",
+        "gpu",
+        "--method",
+        "lmm1",
+        "--width",
+        "32",
+        "--height",
+        "18",
+        "--out",
+        "out.####.exr",
+    ];
+    let run = lmanim(&args, dir.path());
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(dir.path().join("out.0000.exr").is_file());
+}
+
+/// A city block with 64 street lamps (two words of lights per node mask)
+/// and cars in the dynamic layer, over two frames (the second reuses the
+/// first's masks): LMM1 and LMM frames on the GPU, shaded by formula (2)
+/// from its resident mask pool, are the CPU's.
+#[test]
+fn city_light_mesh_frames_with_64_lamps_match_the_cpu() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let city = dir.path().join("city64.glb");
+    let params = CityParams {
+        blocks: 4,
+        lamps: 64,
+        cars: 3,
+        ..CityParams::default()
+    };
+    city_block(&params)
+        .and_then(|builder| builder.write_glb(&city))
+        .expect("city");
+    for method in ["lmm1", "lmm"] {
+        let args = ["--method", method, "--width", "64", "--height", "36"];
+        assert_backends_agree(&city, "0..2", &args);
+    }
+}
+
+/// The courtyard by LMM1 at 64×36 with h = 0.1 m.
+fn courtyard_lmm1() -> Settings {
+    let mut settings = Settings {
+        width: 64,
+        height: 36,
+        method: Method::Lmm1,
+        ..Settings::default()
+    };
+    settings.lightmesh.h = Some(0.1);
+    settings
+}
+
+/// The courtyard's frames at `times` (one sequence, masks reused) by
+/// [`courtyard_lmm1`] on `backend`, whose mask pool (on a GPU backend)
+/// may take `limit` bytes: each image with the light mesh's stats, or the
+/// refusal's message.
+fn courtyard_frames_with_mask_pool(
+    backend: &mut Backend,
+    limit: usize,
+    times: &[f64],
+) -> Result<Vec<(Image, LightMeshStats)>, String> {
+    backend.limit_mask_memory(limit);
+    let settings = courtyard_lmm1();
+    let mut sequence = Sequence::load(&sample("courtyard.gltf")).expect("courtyard");
+    let mut frames = Vec::new();
+    for &time in times {
+        let mut stats = FrameStats::default();
+        let placed = (sequence.advance(time, &settings, &mut stats)).expect("camera");
+        let image = sequence
+            .render(backend, &placed, &settings, &mut stats)
+            .map_err(|error| error.to_string())?;
+        frames.push((image, stats.lightmesh.expect("light-mesh stats")));
+    }
+    Ok(frames)
+}
+
+/// The courtyard's first frame, as [`courtyard_frames_with_mask_pool`].
+fn courtyard_with_mask_pool(
+    backend: &mut Backend,
+    limit: usize,
+) -> Result<(Image, LightMeshStats), String> {
+    let mut frames = courtyard_frames_with_mask_pool(backend, limit, &[0.0])?;
+    Ok(frames.remove(0))
+}
+
+/// A mask pool smaller than the frame's bricks evicts bricks no level
+/// reads and gives the unbounded pool's image; one smaller than a single
+/// level's bricks refuses the frame, naming h and the setting to raise.
+/// The courtyard's mirror and glass levels read bricks its camera level
+/// does not, so the smallest pool that serves the frame must evict.
+#[test]
+fn a_small_mask_pool_evicts_without_changing_the_image_or_refuses_clearly() {
+    let Some(gpu) = gpu() else { return };
+    let exact = gpu.rounds_as_the_cpu();
+    let mut backend = Backend::Gpu(Box::new(gpu));
+    let (reference, unbounded) =
+        courtyard_with_mask_pool(&mut backend, usize::MAX).expect("unbounded pool");
+    assert_eq!(unbounded.bricks_evicted, 0);
+    if exact {
+        let mut cpu = Backend::new(BackendKind::Cpu, Some(2)).expect("CPU backend");
+        let (on_cpu, _) = courtyard_with_mask_pool(&mut cpu, 0).expect("CPU frame");
+        assert_eq!(reference, on_cpu, "the GPU's frame is the CPU's");
+    }
+    // Bisect for the smallest pool that serves the frame: `refused`
+    // bricks are too few, `served` enough.
+    // One u32 of lights per node group: the courtyard has a few lamps.
+    let slot = MaskPool::slot_bytes(1);
+    let (mut refused, mut served) = (0, unbounded.bricks_uploaded as usize);
+    let mut smallest = None;
+    while served - refused > 1 {
+        let slots = (refused + served) / 2;
+        match courtyard_with_mask_pool(&mut backend, slots * slot) {
+            Ok((image, stats)) => {
+                assert_eq!(image, reference, "a pool of {slots} bricks");
+                (served, smallest) = (slots, Some(stats));
+            }
+            Err(message) => {
+                assert!(
+                    message.contains("h = 0.1 m") && message.contains("lightmesh.gpu_memory_mib"),
+                    "{message}"
+                );
+                refused = slots;
+            }
+        }
+    }
+    let smallest = smallest.expect("a pool smaller than every upload serves the frame");
+    assert!(refused > 0, "even a one-brick pool served the frame");
+    assert!(
+        smallest.bricks_evicted > 0,
+        "a pool of {served} bricks served the frame without evicting"
     );
-    assert_eq!(run.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&run.stderr).contains("backend cpu only"));
+    // Over the rolling ball's frames, with the smallest pool (a little
+    // larger) that serves them all: later frames read most bricks
+    // resident (points the pool serves, whose bricks must not be
+    // evicted), admit the others and evict.
+    if exact {
+        let times = [0.0, 1.0 / 24.0, 2.0 / 24.0];
+        let mut cpu = Backend::new(BackendKind::Cpu, Some(2)).expect("CPU backend");
+        let on_cpu = courtyard_frames_with_mask_pool(&mut cpu, 0, &times).expect("CPU frames");
+        let evicting = (0..8)
+            .filter_map(|step| {
+                let slots = served + step * served / 16;
+                courtyard_frames_with_mask_pool(&mut backend, slots * slot, &times).ok()
+            })
+            .find(|frames| {
+                frames[1..]
+                    .iter()
+                    .any(|(_, stats)| stats.bricks_evicted > 0)
+            })
+            .expect("a pool that serves every frame by evicting");
+        for (time, ((gpu, stats), (cpu, _))) in times.iter().zip(evicting.iter().zip(&on_cpu)) {
+            assert_eq!(gpu, cpu, "t = {time}");
+            if *time > 0.0 {
+                assert!(stats.points_demanded > 0 && stats.bricks_uploaded > 0);
+            }
+        }
+    }
+}
+
+/// The fill on the GPU settles groups with the CPU's shafts and traces
+/// each bit left as its own segment; the CPU's also remembers walls and
+/// hides whole boxes behind one wall. Over every node of eight bricks and
+/// 130 lights (every kind, one inside a dynamic box, some behind a wall
+/// that hides whole bricks, shadow edges across bricks), both layers'
+/// bits and validity are the same, brick for brick.
+#[test]
+fn gpu_fill_bits_equal_the_cpu_fill() {
+    let Some(mut gpu) = gpu() else { return };
+    let exact = gpu.rounds_as_the_cpu();
+    // A floor slab, a dynamic box, and a wall of one large triangle at
+    // x = 0.9 (one triangle, so it can hide a whole brick at once).
+    let (positions, triangles) = cube(4);
+    let wall = [
+        Vec3::new(0.9, -1.0, -8.0),
+        Vec3::new(0.9, -1.0, 8.0),
+        Vec3::new(0.9, 8.0, 0.0),
+    ];
+    let spin = Quat::from_axis_angle(Vec3::new(1.0, 1.0, 0.0).normalize(), 0.6);
+    let object = |positions, triangles, to_render, dynamic| WorldObject {
+        positions,
+        triangles,
+        to_render,
+        dynamic,
+    };
+    let world = World::build(&[
+        object(
+            &positions,
+            &triangles,
+            Affine3A::from_scale_rotation_translation(
+                Vec3::new(3.0, 0.05, 3.0),
+                Quat::IDENTITY,
+                Vec3::new(0.0, -1.2, 0.0),
+            ),
+            false,
+        ),
+        object(&wall, &[[0, 1, 2]], Affine3A::IDENTITY, false),
+        object(
+            &positions,
+            &triangles,
+            Affine3A::from_scale_rotation_translation(
+                Vec3::splat(0.35),
+                spin,
+                Vec3::new(-0.7, 0.1, 0.5),
+            ),
+            true,
+        ),
+    ]);
+    let mut lights = lights_around(Vec3::ZERO);
+    let point = Light {
+        name: None,
+        kind: LightKind::Point,
+        color: Vec3::ONE,
+        intensity: 5.0,
+        range: None,
+        radius: Some(0.1),
+        group: None,
+    };
+    let place = |light: &Light, at: Vec3| {
+        RenderLight::place(
+            light,
+            DMat4::from_translation(at.as_dvec3()),
+            DVec3::ZERO,
+            0.0,
+        )
+    };
+    // One inside the dynamic box, the rest on a ring through the wall.
+    lights.push(place(&point, Vec3::new(-0.7, 0.1, 0.5)));
+    while lights.len() < 130 {
+        let angle = lights.len() as f32 * 0.41;
+        let at = Vec3::new(
+            2.5 * angle.cos(),
+            0.3 + (lights.len() % 5) as f32 * 0.3,
+            2.5 * angle.sin(),
+        );
+        lights.push(place(&point, at));
+    }
+    let words = lights.len().div_ceil(64);
+    let demand = Demand {
+        bricks: (0..8)
+            .map(|corner: i32| BrickDemand {
+                brick: IVec3::new(corner & 1, corner >> 1 & 1, corner >> 2 & 1) - IVec3::ONE,
+                needed: vec![u64::MAX >> (64 * words - lights.len()).min(63); BRICK_NODES * words]
+                    .into_iter()
+                    .enumerate()
+                    .map(|(at, last)| {
+                        if at % words == words - 1 {
+                            last
+                        } else {
+                            u64::MAX
+                        }
+                    })
+                    .collect(),
+            })
+            .collect(),
+        reach: Vec::new(),
+        words,
+    };
+    let mut on_cpu = LightMesh::new(Lattice::new(0.2), 2.5, lights.len(), 1 << 30);
+    let mut on_gpu = on_cpu.clone();
+    let mut cpu_stats = LightMeshStats::default();
+    on_cpu
+        .fill(&demand, &lights, &world, &mut cpu_stats)
+        .expect("CPU fill");
+    assert!(
+        cpu_stats.fill_shafts > 0
+            && cpu_stats.fill_hidden_groups > 0
+            && cpu_stats.fill_remembered > 0,
+        "the CPU fill took every shortcut: {cpu_stats:?}"
+    );
+
+    let fill = on_gpu
+        .fill_segments(&demand, &lights, &world)
+        .expect("segments");
+    let answers = {
+        let passes = gpu.passes_for(&world).expect("upload");
+        let frame_lights = FrameLights::upload(passes.context, &lights).expect("lights");
+        (passes.fill)
+            .trace(passes.context, passes.scene, &frame_lights, &fill.segments)
+            .expect("GPU fill")
+    };
+    let mut gpu_stats = LightMeshStats::default();
+    on_gpu.merge_segments(&demand, &fill, &answers, &mut gpu_stats);
+    assert_eq!(gpu_stats.bits_computed, cpu_stats.bits_computed);
+    assert!(gpu_stats.fill_shafts > 0 && gpu_stats.fill_segments > 0);
+
+    let mut differing = 0usize;
+    let mut dynamic_blocked = 0usize;
+    for brick in &demand.bricks {
+        let (cpu, gpu) = (
+            on_cpu.masks().brick(brick.brick),
+            on_gpu.masks().brick(brick.brick),
+        );
+        let (Some(cpu), Some(gpu)) = (cpu, gpu) else {
+            panic!("brick {} was not filled", brick.brick);
+        };
+        differing += cpu
+            .iter()
+            .zip(gpu)
+            .map(|(a, b)| (a ^ b).count_ones() as usize)
+            .sum::<usize>();
+        for slot in 0..BRICK_NODES {
+            let mask = on_cpu.masks().slot_mask(cpu, slot);
+            dynamic_blocked += (0..words)
+                .map(|word| mask.dynamic_layer(word).0.count_ones() as usize)
+                .sum::<usize>();
+        }
+    }
+    assert!(dynamic_blocked > 0, "the dynamic box blocks some node");
+    if exact {
+        assert_eq!(differing, 0, "bits differ between the fills");
+    } else {
+        assert!(differing * 1000 < answers.len(), "{differing} bits differ");
+    }
+}
+
+/// The disk cache on the GPU backend: a second run starts from the static
+/// bits the first saved (the CPU's light mesh loads them; the pool copies
+/// the bricks up) and renders the same frame as the first, and as the CPU.
+#[test]
+fn gpu_light_mesh_frames_start_from_the_disk_cache() {
+    let Some(gpu) = gpu() else { return };
+    let exact = gpu.rounds_as_the_cpu();
+    let mut backend = Backend::Gpu(Box::new(gpu));
+    let cache = tempfile::tempdir().expect("tempdir");
+    let settings = courtyard_lmm1();
+    let run = |backend: &mut Backend| {
+        let mut sequence = Sequence::load(&sample("courtyard.gltf")).expect("courtyard");
+        sequence.set_cache_dir(Some(cache.path().to_path_buf()));
+        let placed = sequence.place(&settings).expect("camera");
+        let mut stats = FrameStats::default();
+        let image = (sequence.render(backend, &placed, &settings, &mut stats)).expect("frame");
+        sequence.save_cache().expect("cache saved");
+        (image, stats.lightmesh.expect("light-mesh stats"))
+    };
+    let (first, cold) = run(&mut backend);
+    let (second, warm) = run(&mut backend);
+    assert_eq!(cold.bits_loaded, 0);
+    assert!(
+        warm.bits_loaded > 0,
+        "the second run loads the first's bits"
+    );
+    assert!(warm.bits_computed < cold.bits_computed);
+    assert_eq!(first, second);
+    if exact {
+        let mut cpu = Backend::new(BackendKind::Cpu, Some(2)).expect("CPU backend");
+        let (on_cpu, _) = courtyard_with_mask_pool(&mut cpu, 0).expect("CPU frame");
+        assert_eq!(first, on_cpu);
+    }
 }

@@ -127,7 +127,8 @@ fn a_plane_on_a_lattice_plane_has_fewer_candidates() {
         1,
         m,
     );
-    let (_, on_plane) = lightmesh_stats(on_lattice, &settings);
+    let (image, on_plane) = lightmesh_stats(on_lattice.clone(), &settings);
+    gpu::assert_gpu_frame_is(&on_lattice, &settings, &image);
     let volume = 2.0 / 3.0 * std::f64::consts::PI * 2.5f64.powi(3);
     assert!((general.mean_candidates - volume).abs() / volume < 0.03);
     // On the lattice plane, P's candidates are the nodes of whole layers
@@ -286,14 +287,14 @@ fn points_and_surfaces_on_lattice_nodes_and_planes_stay_finite() {
     ];
     add_quads(&mut scene, &[blocker], 1, m);
     for method in [Method::Lmm, Method::Lmm1] {
-        let image = render(
-            scene.clone(),
-            &with_method(settings(40, 40), method, h, 2.0),
-        );
+        let settings = with_method(settings(40, 40), method, h, 2.0);
+        let image = render(scene.clone(), &settings);
         assert!(image
             .pixels
             .iter()
             .all(|p| p.is_finite() && p.min_element() >= 0.0));
+        // The GPU's half-ball rounds its on-plane tolerance as the CPU's.
+        gpu::assert_gpu_frame_is(&scene, &settings, &image);
     }
 }
 
@@ -337,9 +338,14 @@ fn nodes_inside_closed_objects_see_no_light_and_do_not_break_shading() {
     ];
     add_quads(&mut scene, &faces, 2, m);
     let whitted = render(scene.clone(), &settings(40, 40));
-    let lmm = render(
-        scene.clone(),
-        &with_method(settings(40, 40), Method::Lmm, 0.1, 2.5),
+    let lmm_settings = with_method(settings(40, 40), Method::Lmm, 0.1, 2.5);
+    let lmm = render(scene.clone(), &lmm_settings);
+    gpu::assert_gpu_frame_is(&scene, &lmm_settings, &lmm);
+    let lmm1_settings = with_method(settings(40, 40), Method::Lmm1, 0.1, 2.5);
+    gpu::assert_gpu_frame_is(
+        &scene,
+        &lmm1_settings,
+        &render(scene.clone(), &lmm1_settings),
     );
     // Far from the box both agree; the box top (lit, its candidate nodes
     // above it) equals Whitted too: nodes inside the box fail step 2.
@@ -371,6 +377,12 @@ fn more_than_a_hundred_lights_use_several_mask_words() {
     }
     let base = settings(32, 32);
     let whitted = render(scene.clone(), &base);
+    // On the GPU: five words of 32 lights per node, and as many passes
+    // over each point's set.
+    for method in [Method::Lmm1, Method::Lmm] {
+        let settings = with_method(base.clone(), method, 0.05, 2.5);
+        gpu::assert_gpu_frame_is(&scene, &settings, &render(scene.clone(), &settings));
+    }
     let (lmm, stats) = lightmesh_stats(scene, &with_method(base, Method::Lmm, 0.05, 2.5));
     assert!(
         stats.bits_computed > stats.nodes_computed * 64,

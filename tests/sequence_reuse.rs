@@ -12,6 +12,7 @@ mod common;
 use common::*;
 use glam::{DMat4, DVec3, Vec3};
 
+use lmanim::backend::Backend;
 use lmanim::output::Image;
 use lmanim::scene::animation::{AnimationClip, Channel, Interpolation, Sampler};
 use lmanim::scene::pose::dynamic_nodes;
@@ -19,7 +20,7 @@ use lmanim::scene::{
     CameraProperty, LightKind, LightProperty, MaterialProperty, Projection, SceneDesc, Target,
 };
 use lmanim::sequence::Sequence;
-use lmanim::settings::{Method, Settings};
+use lmanim::settings::{BackendKind, Method, Settings};
 use lmanim::stats::FrameStats;
 
 const TIMES: [f64; 4] = [0.0, 1.0, 2.0, 3.0];
@@ -108,10 +109,12 @@ fn settings_for(method: Method) -> Settings {
     settings
 }
 
-/// Every time rendered by one sequence, with its stats.
-fn rendered_in_sequence(scene: &SceneDesc, settings: &Settings) -> Vec<(Image, FrameStats)> {
-    let mut backend =
-        lmanim::backend::Backend::new(lmanim::settings::BackendKind::Cpu, Some(2)).unwrap();
+/// Every time rendered by one sequence on `backend`, with its stats.
+fn rendered_in_sequence(
+    scene: &SceneDesc,
+    settings: &Settings,
+    backend: &mut Backend,
+) -> Vec<(Image, FrameStats)> {
     let mut sequence = Sequence::new(scene.clone(), "street".into()).unwrap();
     TIMES
         .iter()
@@ -119,36 +122,45 @@ fn rendered_in_sequence(scene: &SceneDesc, settings: &Settings) -> Vec<(Image, F
             let mut stats = FrameStats::default();
             let placed = sequence.advance(time, settings, &mut stats).unwrap();
             let image = sequence
-                .render(&mut backend, &placed, settings, &mut stats)
+                .render(backend, &placed, settings, &mut stats)
                 .unwrap();
             (image, stats)
         })
         .collect()
 }
 
-fn rendered_cold(scene: &SceneDesc, settings: &Settings, time: f64) -> Image {
-    let mut backend =
-        lmanim::backend::Backend::new(lmanim::settings::BackendKind::Cpu, Some(2)).unwrap();
+/// `time` rendered by a sequence of its own (a light mesh of its own, so
+/// no mask is reused) on `backend`.
+fn rendered_cold(
+    scene: &SceneDesc,
+    settings: &Settings,
+    time: f64,
+    backend: &mut Backend,
+) -> Image {
     let mut sequence = Sequence::new(scene.clone(), "street".into()).unwrap();
     let mut stats = FrameStats::default();
     let placed = sequence.advance(time, settings, &mut stats).unwrap();
     sequence
-        .render(&mut backend, &placed, settings, &mut stats)
+        .render(backend, &placed, settings, &mut stats)
         .unwrap()
 }
 
-/// For LMM1 and LMM: every time rendered by one sequence, checked equal
-/// to the same time rendered cold, bit for bit.
-fn sequences_equal_cold(scene: &SceneDesc) -> Vec<Vec<(Image, FrameStats)>> {
+fn cpu() -> Backend {
+    Backend::new(BackendKind::Cpu, Some(2)).unwrap()
+}
+
+/// For LMM1 and LMM: every time rendered by one sequence on `backend`,
+/// checked equal to the same time rendered cold, bit for bit.
+fn sequences_equal_cold(scene: &SceneDesc, backend: &mut Backend) -> Vec<Vec<(Image, FrameStats)>> {
     [Method::Lmm1, Method::Lmm]
         .into_iter()
         .map(|method| {
             let settings = settings_for(method);
-            let frames = rendered_in_sequence(scene, &settings);
+            let frames = rendered_in_sequence(scene, &settings, backend);
             for (&time, (image, _)) in TIMES.iter().zip(&frames) {
                 assert_eq!(
                     *image,
-                    rendered_cold(scene, &settings, time),
+                    rendered_cold(scene, &settings, time, backend),
                     "{method} at t = {time}"
                 );
             }
@@ -159,7 +171,7 @@ fn sequences_equal_cold(scene: &SceneDesc) -> Vec<Vec<(Image, FrameStats)>> {
 
 #[test]
 fn frames_with_reused_masks_equal_frames_rendered_cold() {
-    for frames in sequences_equal_cold(&street(true, true, true)) {
+    for frames in sequences_equal_cold(&street(true, true, true), &mut cpu()) {
         for (&time, (_, stats)) in TIMES.iter().zip(&frames) {
             if time > 0.0 {
                 assert!(stats.objects_moved == 1 && stats.lights_moved == 1 && stats.camera_moved);
@@ -204,7 +216,11 @@ fn camera_only_animation_recomputes_no_bit() {
 
 #[test]
 fn a_still_sequence_copies_its_frames() {
-    let frames = rendered_in_sequence(&street(false, false, false), &settings_for(Method::Lmm1));
+    let frames = rendered_in_sequence(
+        &street(false, false, false),
+        &settings_for(Method::Lmm1),
+        &mut cpu(),
+    );
     assert!(!frames[0].1.copied);
     for (image, stats) in &frames[1..] {
         assert!(stats.copied);
@@ -267,7 +283,11 @@ fn assert_re_rendered_with_every_bit_kept(scene: &SceneDesc, frames: &[(Image, F
             frames[index - 1].0,
             "the picture changes at t = {time}"
         );
-        assert_eq!(*image, rendered_cold(scene, &settings, time), "t = {time}");
+        assert_eq!(
+            *image,
+            rendered_cold(scene, &settings, time, &mut cpu()),
+            "t = {time}"
+        );
     }
 }
 
@@ -287,7 +307,7 @@ fn light_colour_animation_re_renders_but_invalidates_and_recomputes_nothing() {
             &[200.0, 150.0, 250.0, 300.0],
         ),
     ]);
-    let frames = rendered_in_sequence(&scene, &settings_for(Method::Lmm));
+    let frames = rendered_in_sequence(&scene, &settings_for(Method::Lmm), &mut cpu());
     for (_, stats) in &frames[1..] {
         assert!(!stats.camera_moved);
     }
@@ -310,7 +330,7 @@ fn material_animation_re_renders_but_invalidates_nothing_and_moves_nothing() {
     )]);
     // A material change makes no object dynamic: the world stays static.
     assert!(dynamic_nodes(&scene).iter().all(|&dynamic| !dynamic));
-    let frames = rendered_in_sequence(&scene, &settings_for(Method::Lmm));
+    let frames = rendered_in_sequence(&scene, &settings_for(Method::Lmm), &mut cpu());
     for (_, stats) in &frames[1..] {
         assert!(!stats.camera_moved);
     }
@@ -325,13 +345,17 @@ fn field_of_view_animation_moves_the_camera_and_invalidates_nothing() {
         &[0.9, 0.8, 0.7, 0.6],
     )]);
     let settings = settings_for(Method::Lmm);
-    let frames = rendered_in_sequence(&scene, &settings);
+    let frames = rendered_in_sequence(&scene, &settings, &mut cpu());
     for (index, (image, stats)) in frames.iter().enumerate().skip(1) {
         let time = TIMES[index];
         assert!(stats.camera_moved && !stats.copied, "t = {time}");
         assert_eq!(stats.bits_invalidated, 0, "t = {time}");
         assert_ne!(*image, frames[index - 1].0, "t = {time}");
-        assert_eq!(*image, rendered_cold(&scene, &settings, time), "t = {time}");
+        assert_eq!(
+            *image,
+            rendered_cold(&scene, &settings, time, &mut cpu()),
+            "t = {time}"
+        );
     }
 }
 
@@ -340,9 +364,9 @@ fn field_of_view_animation_moves_the_camera_and_invalidates_nothing() {
 /// stays): the deformed object's changed regions are its moving clusters'
 /// boxes, and every frame rendered with reused masks equals the same frame
 /// rendered cold.
-#[test]
-fn a_mesh_deforming_in_part_renders_every_frame_like_cold() {
-    let mut scene = street(false, false, false);
+/// `scene` with a sheet at x = 15 whose one half a morph target bends
+/// down and back over the sequence.
+fn with_bending_sheet(mut scene: SceneDesc) -> SceneDesc {
     scene
         .meshes
         .push(half_morphing_sheet(15.0, 3.0, 3.5, 0.25, 1.5));
@@ -357,7 +381,13 @@ fn a_mesh_deforming_in_part_renders_every_frame_like_cold() {
             &[0.0, 0.5, 1.0, 0.25],
         )],
     });
-    for frames in sequences_equal_cold(&scene) {
+    scene
+}
+
+#[test]
+fn a_mesh_deforming_in_part_renders_every_frame_like_cold() {
+    let scene = with_bending_sheet(street(false, false, false));
+    for frames in sequences_equal_cold(&scene, &mut cpu()) {
         for (&time, (_, stats)) in TIMES.iter().zip(&frames) {
             if time > 0.0 {
                 assert_eq!((stats.objects_moved, stats.camera_moved), (1, false));
@@ -369,5 +399,75 @@ fn a_mesh_deforming_in_part_renders_every_frame_like_cold() {
             }
         }
         assert_ne!(frames[0].0, frames[2].0, "the bent half's shadow moves");
+    }
+}
+
+/// The GPU backend keeps the masks resident across frames and uploads
+/// only the bricks edited since: with a truck whose shadow crosses the far
+/// facade, a moving lamp and a bending sheet, for LMM1 and LMM, its frames
+/// equal its own frames rendered cold, and (where it rounds as the CPU
+/// does) the CPU backend's, bit for bit.
+#[test]
+fn gpu_frames_with_resident_masks_equal_cold_frames_and_the_cpus() {
+    let Some(gpu) = common::gpu::backend() else {
+        return;
+    };
+    let exact = gpu.rounds_as_the_cpu();
+    let mut gpu = Backend::Gpu(Box::new(gpu));
+    let scene = with_bending_sheet(street(true, true, false));
+    let on_gpu = sequences_equal_cold(&scene, &mut gpu);
+    for (method, gpu_frames) in [Method::Lmm1, Method::Lmm].into_iter().zip(on_gpu) {
+        let cpu_frames = rendered_in_sequence(&scene, &settings_for(method), &mut cpu());
+        for (&time, ((gpu, gpu_stats), (cpu, _))) in
+            TIMES.iter().zip(gpu_frames.iter().zip(&cpu_frames))
+        {
+            if time > 0.0 {
+                let mesh = gpu_stats.lightmesh.expect("light-mesh stats");
+                assert!(mesh.bits_reused > 0, "{method} reuses bits at t = {time}");
+                assert!(
+                    gpu_stats.bits_invalidated > 0,
+                    "{method} drops bits at t = {time}"
+                );
+            }
+            if exact {
+                assert_eq!(gpu, cpu, "{method} at t = {time}");
+            }
+        }
+    }
+}
+
+/// On the GPU, where nothing that shadows moves (only a light's colour
+/// animates), frames after the first find every mask they read resident:
+/// no point goes back to the CPU for demand, no brick is copied again,
+/// and the frames are the CPU's.
+#[test]
+fn gpu_frames_that_move_nothing_send_no_point_to_the_cpu() {
+    let Some(gpu) = common::gpu::backend() else {
+        return;
+    };
+    let exact = gpu.rounds_as_the_cpu();
+    let mut gpu = Backend::Gpu(Box::new(gpu));
+    let scene = street_animating(vec![keyed(
+        Target::Light(1, LightProperty::Color),
+        Interpolation::Linear,
+        &[1.0, 1.0, 1.0, 1.0, 0.8, 0.6, 1.0, 0.5, 0.3, 1.0, 0.3, 0.1],
+    )]);
+    for method in [Method::Lmm1, Method::Lmm] {
+        let settings = settings_for(method);
+        let frames = rendered_in_sequence(&scene, &settings, &mut gpu);
+        let first = frames[0].1.lightmesh.expect("light-mesh stats");
+        assert!(first.points_demanded > 0 && first.bricks_uploaded > 0);
+        for (index, (_, stats)) in frames.iter().enumerate().skip(1) {
+            let mesh = stats.lightmesh.expect("light-mesh stats");
+            assert!(stats.shading_points > 0, "{method}: re-rendered");
+            assert_eq!(mesh.points_demanded, 0, "{method} at t = {}", TIMES[index]);
+            assert_eq!(mesh.bricks_uploaded, 0, "{method} at t = {}", TIMES[index]);
+        }
+        if exact {
+            let on_cpu = rendered_in_sequence(&scene, &settings, &mut cpu());
+            for ((gpu, _), (cpu, _)) in frames.iter().zip(&on_cpu) {
+                assert_eq!(gpu, cpu, "{method}");
+            }
+        }
     }
 }

@@ -107,7 +107,7 @@ type BreakRule = fn(&mut Settings);
 /// Each case breaks one rule; the message must name the field.
 #[test]
 fn impossible_values_are_rejected() {
-    let cases: [(&str, BreakRule); 20] = [
+    let cases: [(&str, BreakRule); 21] = [
         ("width", |s| s.width = 0),
         ("width", |s| s.width = 32769),
         ("height", |s| s.height = 0),
@@ -124,6 +124,9 @@ fn impossible_values_are_rejected() {
         ("lightmesh.h", |s| s.lightmesh.h = Some(-1.0)),
         ("lightmesh.h", |s| s.lightmesh.h = Some(0.0)),
         ("lightmesh.h", |s| s.lightmesh.h = Some(f32::INFINITY)),
+        ("lightmesh.gpu_memory_mib", |s| {
+            s.lightmesh.gpu_memory_mib = 0
+        }),
         ("default_radius", |s| s.lamps.default_radius = Some(-0.1)),
         ("default_radius", |s| {
             s.lamps.default_radius = Some(f32::NAN)

@@ -96,19 +96,21 @@ impl CpuBackend {
             Ok::<_, RenderError>((shaded, terms))
         })?;
         if let (true, Some(mesh)) = (method.uses_light_mesh(), light_mesh) {
-            let points = stats.shading_points.max(1) as f64;
-            stats.lightmesh = Some(LightMeshStats {
-                h: mesh.lattice.h,
-                ki: mesh.ki,
-                mean_candidates: counts.candidates as f64 / points,
-                mean_interp_set: counts.interp_set as f64 / points,
-                mean_p2n_tests: counts.p2n_tests as f64 / points,
-                fallback_points: counts.fallback,
-                bits_cached: mesh.masks().known_bits(),
-                ..lightmesh
-            });
+            stats.lightmesh = Some(mesh.frame_stats(lightmesh, counts, stats.shading_points));
         }
         Ok(frame)
+    }
+
+    /// Computes the masks `job`'s frame will need (hits, demand and fill,
+    /// band by band) without shading it; the light-mesh stats go to
+    /// `stats`.
+    pub fn warm(
+        &self,
+        job: &FrameJob,
+        mesh: &mut LightMesh,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
+        self.pool.install(|| warm_light_mesh(job, mesh, stats))
     }
 
     /// Renders one frame with every light visible from every point
@@ -172,6 +174,33 @@ impl CpuBackend {
             })
         })
     }
+}
+
+/// The stages of a light-mesh frame that fill masks (hits, demand, fill),
+/// band by band on the current rayon pool, without shading: what a farm's
+/// first task runs to fill the disk cache (`lmanim warm`). Enclosure
+/// flags are left to the render, since the cache does not keep them.
+pub(super) fn warm_light_mesh(
+    job: &FrameJob,
+    mesh: &mut LightMesh,
+    stats: &mut FrameStats,
+) -> Result<(), RenderError> {
+    let lanes = LightLanes::new(&job.frame.lights);
+    let mut work = LightMeshStats::default();
+    for rows in bands(job) {
+        let (points, _) = hits(job, rows, stats);
+        let start = Instant::now();
+        work.points_demanded += points.len() as u64;
+        let demand = mesh.demand(&points, &lanes)?;
+        stats.add_stage_time("demand", start.elapsed().as_secs_f64());
+        let start = Instant::now();
+        mesh.fill(&demand, &job.frame.lights, job.world, &mut work)?;
+        stats.add_stage_time("fill", start.elapsed().as_secs_f64());
+        stats.shading_points += points.len() as u64;
+    }
+    stats.rays.shadow += work.fill_segments;
+    stats.lightmesh = Some(mesh.frame_stats(work, PointCounts::default(), stats.shading_points));
+    Ok(())
 }
 
 /// Stages 1–2 for one band of rows: the camera rays' hits, then the
@@ -250,6 +279,7 @@ fn shade_by_method<T: PointTerms>(
         }
         (Method::Lmm | Method::Lmm1, Some(mesh)) => {
             let start = Instant::now();
+            lightmesh.points_demanded += points.len() as u64;
             let demand = mesh.demand(points, lanes)?;
             stats.add_stage_time("demand", start.elapsed().as_secs_f64());
 

@@ -1,10 +1,11 @@
 //! Backends run a frame's stages on some hardware, behind one seam:
-//! [`Backend`]. The CPU backend (rayon) is the reference and runs every
-//! method; the GPU backend (wgpu compute) runs the ray tracing of the
-//! stages (primary and secondary hits, formula (1) whole, the lamps'
-//! shadow segments) as compute passes that round as the CPU does, and
-//! keeps the rest the CPU's, so its frames match the CPU's. The core
-//! (scene, accel, render) never knows which one runs it.
+//! [`Backend`]. The CPU backend (rayon) is the reference; the GPU backend
+//! (wgpu compute) runs hits, shading points, formula (1), the lamps'
+//! segments, the light mesh's fill and formula (2) as compute passes that
+//! round as the CPU does, and keeps on the CPU what it cannot do as well
+//! (lamp sampling, the light mesh's demand and bookkeeping), so its frames
+//! match the CPU's. Both run every method. The core (scene, accel,
+//! render) never knows which one runs it.
 
 mod aov;
 mod band;
@@ -71,11 +72,33 @@ impl Backend {
         }
     }
 
+    /// Bounds the GPU memory the light mesh's resident masks may take; the
+    /// CPU backend keeps its masks in the light mesh alone.
+    pub fn limit_mask_memory(&mut self, bytes: usize) {
+        if let Backend::Gpu(gpu) = self {
+            gpu.limit_mask_memory(bytes);
+        }
+    }
+
     /// The adapter a GPU backend runs on, for the user; None on the CPU.
     pub fn adapter(&self) -> Option<String> {
         match self {
             Backend::Cpu(_) => None,
             Backend::Gpu(gpu) => Some(gpu.adapter()),
+        }
+    }
+
+    /// Computes the light-mesh masks `job`'s frame will need, without
+    /// shading it (`lmanim warm`); the light-mesh stats go to `stats`.
+    pub fn warm(
+        &mut self,
+        job: &FrameJob,
+        mesh: &mut LightMesh,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
+        match self {
+            Backend::Cpu(cpu) => cpu.warm(job, mesh, stats),
+            Backend::Gpu(gpu) => gpu.warm(job, mesh, stats),
         }
     }
 
@@ -93,7 +116,7 @@ impl Backend {
     ) -> Result<RenderedFrame, RenderError> {
         match self {
             Backend::Cpu(cpu) => cpu.render(job, method, light_mesh, stats),
-            Backend::Gpu(gpu) => Ok(gpu.render(job, method, stats)?.into()),
+            Backend::Gpu(gpu) => Ok(gpu.render(job, method, light_mesh, stats)?.into()),
         }
     }
 }

@@ -51,7 +51,7 @@ struct FillWork {
 }
 
 /// Fewer nodes than this are cheaper to trace one by one than by a shaft.
-const MIN_SHAFT_NODES: usize = 4;
+pub(super) const MIN_SHAFT_NODES: usize = 4;
 
 /// The two layers of a mask, each tested against its own geometry.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -292,7 +292,11 @@ impl LightMesh {
         filled
     }
 
-    fn check_memory(&self, demand: &Demand, lights: usize) -> Result<(), LightMeshError> {
+    pub(super) fn check_memory(
+        &self,
+        demand: &Demand,
+        lights: usize,
+    ) -> Result<(), LightMeshError> {
         let bytes = self.bytes_after(demand, lights);
         if bytes > self.memory_limit {
             return Err(self.too_large(bytes));

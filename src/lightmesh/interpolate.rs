@@ -12,7 +12,7 @@ use glam::IVec3;
 
 use super::enclosure::blocks_some;
 use super::masks::BrickCache;
-use super::LightMesh;
+use super::{LightMesh, LightMeshStats};
 use crate::accel::offset::offset_ray_origin;
 use crate::accel::{Ray, World};
 use crate::bits::set_bits;
@@ -76,6 +76,28 @@ impl<'a> Scratch<'a> {
 }
 
 impl LightMesh {
+    /// A frame's light-mesh statistics: what demand, fill and enclosure
+    /// did (`work`), what shading its `points` shading points cost
+    /// (`counts`), and what the store holds after it.
+    pub fn frame_stats(
+        &self,
+        work: LightMeshStats,
+        counts: PointCounts,
+        points: u64,
+    ) -> LightMeshStats {
+        let points = points.max(1) as f64;
+        LightMeshStats {
+            h: self.lattice.h,
+            ki: self.ki,
+            mean_candidates: counts.candidates as f64 / points,
+            mean_interp_set: counts.interp_set as f64 / points,
+            mean_p2n_tests: counts.p2n_tests as f64 / points,
+            fallback_points: counts.fallback,
+            bits_cached: self.masks().known_bits(),
+            ..work
+        }
+    }
+
     /// Direct light at `point` by formula (2), light by light into
     /// `terms`, and what it cost. `reach` holds the lights that can reach
     /// the point (from the demand stage); every bit this reads was filled

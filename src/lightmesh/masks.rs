@@ -23,13 +23,39 @@ pub const BRICK_EDGE: i32 = 8;
 /// Nodes in a brick; a node's slot in its brick is in `0..BRICK_NODES`.
 pub const BRICK_NODES: usize = (BRICK_EDGE * BRICK_EDGE * BRICK_EDGE) as usize;
 
-#[derive(Clone, Debug, Default)]
+#[derive(Debug)]
 pub struct MaskStore {
+    lights: usize,
     /// Words of visibility (and as many of validity) bits per node.
     words: usize,
     bricks: FxHashMap<IVec3, Brick>,
     /// Nodes with at least one valid bit, kept as bits are set.
     nodes: usize,
+    /// Which store this is, and how many edits it has had: a copy of its
+    /// bricks elsewhere (the GPU backend's pool) knows by these whether a
+    /// brick it holds is still current, without comparing bits.
+    id: u64,
+    revision: u64,
+}
+
+/// A store's copies are stores of their own: their edits diverge.
+impl Clone for MaskStore {
+    fn clone(&self) -> MaskStore {
+        MaskStore {
+            lights: self.lights,
+            words: self.words,
+            bricks: self.bricks.clone(),
+            nodes: self.nodes,
+            id: next_store_id(),
+            revision: self.revision,
+        }
+    }
+}
+
+fn next_store_id() -> u64 {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static NEXT_ID: AtomicU64 = AtomicU64::new(0);
+    NEXT_ID.fetch_add(1, Ordering::Relaxed)
 }
 
 /// One brick's bits, and which lights have a valid dynamic bit in it.
@@ -46,6 +72,8 @@ pub struct Brick {
     /// static geometry ([`super::enclosure`]), and whether that is known.
     /// It depends on the static geometry alone, so nothing invalidates it.
     enclosure: BrickEnclosure,
+    /// The store's revision at the brick's last edit.
+    revision: u64,
 }
 
 impl Brick {
@@ -54,6 +82,7 @@ impl Brick {
             nodes: vec![0; BRICK_NODES * GROUPS * words].into_boxed_slice(),
             dynamic_lights: vec![0; words].into_boxed_slice(),
             enclosure: BrickEnclosure::default(),
+            revision: 0,
         }
     }
 }
@@ -146,10 +175,42 @@ impl LayerUpdate {
 impl MaskStore {
     pub fn new(lights: usize) -> MaskStore {
         MaskStore {
+            lights,
             words: lights.div_ceil(64).max(1),
             bricks: FxHashMap::default(),
             nodes: 0,
+            id: next_store_id(),
+            revision: 0,
         }
+    }
+
+    /// This store's identity: no other store, copies included, has it.
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
+    /// The store's revision at the last edit of `brick` (None when the
+    /// store holds no such brick): it changes whenever any of the brick's
+    /// bits or flags may have.
+    pub fn brick_revision(&self, brick: IVec3) -> Option<u64> {
+        self.bricks.get(&brick).map(|stored| stored.revision)
+    }
+
+    /// `brick`, made if the store has none yet, stamped as edited now.
+    fn edit(&mut self, brick: IVec3) -> &mut Brick {
+        self.revision += 1;
+        let words = self.words;
+        let stored = self
+            .bricks
+            .entry(brick)
+            .or_insert_with(|| Brick::new(words));
+        stored.revision = self.revision;
+        stored
+    }
+
+    /// The lights nL whose bits the store holds.
+    pub fn lights(&self) -> usize {
+        self.lights
     }
 
     /// Words of visibility bits per node: `ceil(nL / 64)`.
@@ -221,10 +282,7 @@ impl MaskStore {
 
     fn merge_slot(&mut self, brick: IVec3, slot: usize, update: &LayerUpdate, offset: usize) {
         let words = self.words;
-        let stored = self
-            .bricks
-            .entry(brick)
-            .or_insert_with(|| Brick::new(words));
+        let stored = self.edit(brick);
         let node = &mut stored.nodes[slot * GROUPS * words..(slot + 1) * GROUPS * words];
         let was_empty = node[STATIC_VALID * words..(STATIC_VALID + 1) * words]
             .iter()
@@ -262,6 +320,8 @@ impl MaskStore {
     {
         use rayon::prelude::*;
         let words = self.words;
+        self.revision += 1;
+        let revision = self.revision;
         self.bricks
             .par_iter_mut()
             .map(|(brick, stored)| {
@@ -270,7 +330,11 @@ impl MaskStore {
                     dynamic_lights: &mut stored.dynamic_lights,
                     words,
                 };
-                clear(*brick, validity)
+                let cleared = clear(*brick, validity);
+                if cleared > 0 {
+                    stored.revision = revision;
+                }
+                cleared
             })
             .sum()
     }
@@ -345,12 +409,7 @@ impl MaskStore {
 
     /// Records the enclosure flags settled for the `known` slots of a brick.
     pub fn merge_enclosure(&mut self, brick: IVec3, settled: &BrickEnclosure) {
-        let words = self.words;
-        let stored = &mut self
-            .bricks
-            .entry(brick)
-            .or_insert_with(|| Brick::new(words))
-            .enclosure;
+        let stored = &mut self.edit(brick).enclosure;
         for word in 0..BRICK_WORDS {
             let known = settled.known[word];
             stored.enclosed[word] =
@@ -384,11 +443,8 @@ impl MaskStore {
     /// is left invalid, so the fill stage still tests dynamic objects.
     pub fn import_static(&mut self, brick: IVec3, light: usize, bits: &BrickLightBits) -> u64 {
         let (words, word, bit) = (self.words, light / 64, 1u64 << (light % 64));
-        let stored = self
-            .bricks
-            .entry(brick)
-            .or_insert_with(|| Brick::new(words));
-        let mut imported = 0;
+        let stored = self.edit(brick);
+        let (mut imported, mut new_nodes) = (0, 0);
         for (slot, node) in stored.nodes.chunks_mut(GROUPS * words).enumerate() {
             if bits.valid[slot / 64] >> (slot % 64) & 1 == 0
                 || node[STATIC_VALID * words + word] & bit != 0
@@ -406,9 +462,10 @@ impl MaskStore {
                 node[at] & !bit
             };
             node[STATIC_VALID * words + word] |= bit;
-            self.nodes += was_empty as usize;
+            new_nodes += was_empty as usize;
             imported += 1;
         }
+        self.nodes += new_nodes;
         imported
     }
 }
@@ -678,6 +735,48 @@ mod tests {
             }
         }
         assert!(cache.mask(IVec3::new(100, 0, 0)).is_none());
+    }
+
+    /// A copy of the store elsewhere (the GPU's pool) trusts a brick
+    /// while its revision holds: every edit must move it, and nothing
+    /// else may.
+    #[test]
+    fn a_brick_revision_moves_with_every_edit_of_the_brick_and_only_then() {
+        let mut store = MaskStore::new(3);
+        let (a, b) = (IVec3::new(1, 2, 3), IVec3::new(40, 0, 0));
+        assert_eq!(store.brick_revision(split(a).0), None);
+        store.set(a, 0, true, Some(false));
+        store.set(b, 1, true, Some(true));
+        let revision = |store: &MaskStore, node| store.brick_revision(split(node).0).unwrap();
+        let (before_a, before_b) = (revision(&store, a), revision(&store, b));
+        assert_ne!(before_a, before_b);
+
+        // Invalidation that clears nothing in a brick leaves it alone.
+        store.invalidate(|brick, validity| {
+            if brick == split(b).0 {
+                validity.clear_lights(0, 1 << 1)
+            } else {
+                0
+            }
+        });
+        assert_eq!(revision(&store, a), before_a);
+        let after_b = revision(&store, b);
+        assert_ne!(after_b, before_b);
+
+        store.merge_enclosure(split(a).0, &BrickEnclosure::default());
+        assert_ne!(revision(&store, a), before_a);
+        assert_eq!(revision(&store, b), after_b);
+
+        let bits = BrickLightBits {
+            valid: [1; BRICK_WORDS],
+            visible: [0; BRICK_WORDS],
+        };
+        let before_import = revision(&store, b);
+        store.import_static(split(b).0, 2, &bits);
+        assert_ne!(revision(&store, b), before_import);
+
+        // A copy is another store: its edits cannot pass for the original's.
+        assert_ne!(store.clone().id(), store.id());
     }
 
     #[test]

@@ -19,6 +19,7 @@ pub mod lattice;
 pub mod masks;
 pub mod persistent;
 mod region_tree;
+pub mod segments;
 pub mod spacing;
 
 use serde::Serialize;
@@ -47,6 +48,15 @@ pub enum LightMeshError {
     TooLarge {
         needed_mib: usize,
         limit_mib: usize,
+        h: f32,
+    },
+    #[error(
+        "one level of the frame reads {needed_mib:.1} MiB of node masks on the GPU \
+         (limit {limit_mib:.1} MiB) with h = {h} m; raise h or lightmesh.gpu_memory_mib"
+    )]
+    PoolTooSmall {
+        needed_mib: f64,
+        limit_mib: f64,
         h: f32,
     },
     #[error("h = {h} m is too small for a scene this far from its centre ({distance} m): node coordinates would overflow")]
@@ -95,6 +105,16 @@ pub struct LightMeshStats {
     /// Static bits imported from the disk cache this frame (only the
     /// frame that made the light mesh loads any).
     pub bits_loaded: u64,
+    /// Shading points whose masks went through demand and fill: all of
+    /// them on the CPU backend; on the GPU backend only those its mask
+    /// pool did not serve yet (with reuse, a few).
+    pub points_demanded: u64,
+    /// Bricks copied into the GPU backend's mask pool this frame (new to
+    /// it, or edited since their last copy); 0 on the CPU backend.
+    pub bricks_uploaded: u64,
+    /// Bricks the GPU's mask pool evicted this frame to stay within
+    /// `lightmesh.gpu_memory_mib`.
+    pub bricks_evicted: u64,
 }
 
 impl LightMesh {

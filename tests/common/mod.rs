@@ -1,9 +1,11 @@
 //! Scenes built in memory for the renderer's tests: quads, lights and
 //! cameras as plain `SceneDesc` data, so each test states its geometry;
-//! and ([`cli`]) running the binary and what its tests assert of failures.
+//! and ([`cli`]) running the binary and what its tests assert of failures;
+//! ([`gpu`]) the GPU backend where tests have one.
 #![allow(dead_code)] // each test file uses its own subset
 
 pub mod cli;
+pub mod gpu;
 
 use glam::{DMat4, DQuat, DVec3, Vec3, Vec4};
 use lmanim::output::Image;
@@ -172,14 +174,23 @@ pub fn render(scene: SceneDesc, settings: &Settings) -> Image {
 }
 
 pub fn render_with_stats(scene: SceneDesc, settings: &Settings) -> (Image, FrameStats) {
-    let mut sequence = Sequence::new(scene, "test".into()).expect("scene places");
     let mut backend =
         lmanim::backend::Backend::new(lmanim::settings::BackendKind::Cpu, settings.threads)
             .expect("thread pool");
+    render_on(&mut backend, scene, settings)
+}
+
+/// The scene's first frame rendered on `backend`, with its stats.
+pub fn render_on(
+    backend: &mut lmanim::backend::Backend,
+    scene: SceneDesc,
+    settings: &Settings,
+) -> (Image, FrameStats) {
+    let mut sequence = Sequence::new(scene, "test".into()).expect("scene places");
     let placed = sequence.place(settings).expect("camera");
     let mut stats = FrameStats::default();
     let image = sequence
-        .render(&mut backend, &placed, settings, &mut stats)
+        .render(backend, &placed, settings, &mut stats)
         .expect("frame renders");
     (image, stats)
 }

@@ -3,11 +3,10 @@
 
 use std::fmt;
 
-/// Storage buffers one pass binds at most: its items and answers, and
-/// eight more (the flat world's seven arrays and the lights for formula
-/// (1); hits, meshes, textures and the frame's placement for shading
-/// points).
-pub const STORAGE_BUFFERS: u32 = 10;
+/// Storage buffers one pass binds at most: formula (2)'s, which binds its
+/// points and answers, the flat world's seven arrays, the lights, the
+/// points' reaching lights, the mask pool, its directory and its counters.
+pub const STORAGE_BUFFERS: u32 = 14;
 
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
@@ -33,8 +32,6 @@ pub enum GpuError {
         depth: usize,
         limit: usize,
     },
-    #[error("--backend gpu renders whitted and area; the light-mesh methods run on --backend cpu")]
-    LightMeshOnGpu,
     #[error("--backend gpu: reading results back failed: {0}")]
     Readback(String),
     /// The device refused work (out of memory, or a limit the checks
@@ -122,11 +119,11 @@ impl GpuContext {
     /// Runs `work` (buffer creation, passes) with the device's errors
     /// caught and returned as [`GpuError::Refused`] naming `what`: wgpu
     /// would otherwise hand them to its default handler, which panics.
-    pub fn checked<T>(
+    pub fn checked<T, E: From<GpuError>>(
         &self,
         what: &'static str,
-        work: impl FnOnce() -> Result<T, GpuError>,
-    ) -> Result<T, GpuError> {
+        work: impl FnOnce() -> Result<T, E>,
+    ) -> Result<T, E> {
         let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let done = work();
@@ -137,7 +134,8 @@ impl GpuContext {
                 what,
                 adapter: self.info.name.clone(),
                 reason: error.to_string().replace('\n', " "),
-            }),
+            }
+            .into()),
             None => done,
         }
     }

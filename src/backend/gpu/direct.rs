@@ -95,6 +95,14 @@ pub struct FrameLights {
 }
 
 impl FrameLights {
+    pub fn buffer(&self) -> &wgpu::Buffer {
+        &self.buffer
+    }
+
+    pub fn count(&self) -> u32 {
+        self.count
+    }
+
     pub fn upload(context: &GpuContext, lights: &[RenderLight]) -> Result<FrameLights, GpuError> {
         let flat: Vec<FlatLight> = lights.iter().map(FlatLight::from).collect();
         Ok(FrameLights {

@@ -16,6 +16,7 @@ use super::camera::CameraRecord;
 use super::context::{GpuContext, GpuError};
 use super::direct::{DirectLight, FrameLights};
 use super::film::Film;
+use super::light_mesh::LightMeshShading;
 use super::pass::{answer_buffer, read_back, BATCH};
 use super::scatter::batches;
 use super::scene::{storage, GpuScene};
@@ -23,14 +24,24 @@ use super::surface::{FrameSurfaces, LevelBuffers, PathRay, SceneSurfaces, Surfac
 use super::Pipelines;
 use crate::accel::Ray;
 use crate::backend::sampling::lamp_sample;
+use crate::backend::RenderError;
 use crate::render::surface::ShadingPoint;
 use crate::render::{area, FrameJob};
-use crate::settings::Method;
 use crate::stats::FrameStats;
 
 /// Points whose lamp samples go to the GPU together (`--method area`): at
 /// 64 lights, about a million segments.
 const SHADE_CHUNK: usize = 16384;
+
+/// How a level's points get their direct light.
+pub enum DirectMethod<'m> {
+    /// Formula (1), on the GPU.
+    Whitted,
+    /// Lamp samples made on the CPU, their segments tested on the GPU.
+    Area,
+    /// Formula (2), on the GPU, from masks the CPU keeps valid.
+    LightMesh(Box<LightMeshShading<'m>>),
+}
 
 /// One frame's view of the backend, with the frame's uploads.
 pub struct Frame<'a> {
@@ -49,9 +60,9 @@ impl Frame<'_> {
     pub fn render_band(
         &self,
         rows: Range<u32>,
-        method: Method,
+        method: &mut DirectMethod,
         stats: &mut FrameStats,
-    ) -> Result<Vec<Vec4>, GpuError> {
+    ) -> Result<Vec<Vec4>, RenderError> {
         let job = self.job;
         let context = self.context;
         let pixels = ((rows.end - rows.start) * job.width) as usize;
@@ -73,7 +84,8 @@ impl Frame<'_> {
                     &camera,
                     count,
                 )?;
-                let encoder = self.shade(encoder, &camera_rays, &film, method, band_start)?;
+                let encoder =
+                    self.shade(encoder, &camera_rays, &film, method, band_start, stats)?;
                 level.extend(self.continue_paths(encoder, &camera_rays, 0)?);
             }
             stats.rays.primary += band_samples as u64;
@@ -85,7 +97,7 @@ impl Frame<'_> {
                 let mut next = Vec::new();
                 for paths in &level {
                     let encoder = context.device.create_command_encoder(&Default::default());
-                    let encoder = self.shade(encoder, paths, &film, method, band_start)?;
+                    let encoder = self.shade(encoder, paths, &film, method, band_start, stats)?;
                     next.extend(self.continue_paths(encoder, paths, depth)?);
                 }
                 level = next;
@@ -102,20 +114,35 @@ impl Frame<'_> {
     }
 
     /// Records a level's closest hits, shading points, direct light and
-    /// accumulation into the film; for `area`, submits halfway to make
-    /// the lamp samples on the CPU. The encoder to go on with.
+    /// accumulation into the film; for `area` and the light mesh, submits
+    /// halfway to bring points to the CPU (lamp samples; demand and fill
+    /// for the points the mask pool does not serve). The encoder to go on
+    /// with.
     fn shade(
         &self,
         mut encoder: wgpu::CommandEncoder,
         level: &LevelBuffers,
         film: &Film,
-        method: Method,
+        method: &mut DirectMethod,
         band_start: u64,
-    ) -> Result<wgpu::CommandEncoder, GpuError> {
+        stats: &mut FrameStats,
+    ) -> Result<wgpu::CommandEncoder, RenderError> {
         let (context, pipelines, scene) = (self.context, self.pipelines, self.scene);
         self.record_points(&mut encoder, level);
         let direct = match method {
-            Method::Area => {
+            DirectMethod::Whitted => {
+                let direct = answer_buffer::<DirectLight>(context, "direct light", level.count)?;
+                (pipelines.direct).record(
+                    context,
+                    &mut encoder,
+                    scene,
+                    &self.lights,
+                    level,
+                    &direct,
+                );
+                direct
+            }
+            DirectMethod::Area => {
                 let points = read_back(context, encoder, &level.points, level.count)?;
                 encoder = context.device.create_command_encoder(&Default::default());
                 storage(
@@ -124,14 +151,28 @@ impl Frame<'_> {
                     &self.area_light(&points, band_start)?,
                 )?
             }
-            _ => {
+            DirectMethod::LightMesh(light_mesh) => {
+                let (reach, next) = light_mesh.prepare(
+                    &pipelines.light_mesh,
+                    &pipelines.fill,
+                    context,
+                    self.job,
+                    scene,
+                    &self.lights,
+                    level,
+                    encoder,
+                    stats,
+                )?;
+                encoder = next;
                 let direct = answer_buffer::<DirectLight>(context, "direct light", level.count)?;
-                (pipelines.direct).record(
+                light_mesh.record(
+                    &pipelines.light_mesh,
                     context,
                     &mut encoder,
                     scene,
                     &self.lights,
                     level,
+                    &reach,
                     &direct,
                 );
                 direct

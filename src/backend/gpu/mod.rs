@@ -7,8 +7,12 @@
 //! their sum — where the points lie ([`direct`]), their light added to
 //! their pixel samples, and the next level's mirror and glass rays packed
 //! in point order ([`scatter`]). The band's pixels come back resolved
-//! ([`film`]). `--method area` alone brings a level's points back, to
-//! sample its lamps on the CPU and test their segments on the GPU.
+//! ([`film`]). `--method area` brings a level's points back, to sample its
+//! lamps on the CPU and test their segments on the GPU; `lmm` and `lmm1`
+//! shade by formula (2) from masks resident on the GPU ([`mask_pool`]),
+//! bringing back only the points those masks do not serve yet, for the
+//! CPU's demand, whose missing bits the GPU fills ([`fill`],
+//! [`light_mesh`]).
 //!
 //! The passes round as the CPU does, so a frame differs from the CPU
 //! backend's only where a query answers differently, and tests compare
@@ -17,8 +21,11 @@
 mod camera;
 mod context;
 pub(crate) mod direct;
+pub mod fill;
 mod film;
 mod frame;
+mod light_mesh;
+pub mod mask_pool;
 mod pass;
 mod scatter;
 pub(crate) mod scene;
@@ -36,14 +43,18 @@ pub use trace::RayQueries;
 use super::band::bands;
 use super::{thread_pool, BackendError, RenderError};
 use crate::accel::{Ray, World};
+use crate::lightmesh::LightMesh;
 use crate::output::Image;
 use crate::render::surface::ShadingPoint;
 use crate::render::FrameJob;
-use crate::settings::Method;
+use crate::settings::{LightMeshSettings, Method};
 use crate::stats::FrameStats;
 use camera::CameraPass;
+use fill::FillPass;
 use film::FilmPasses;
-use frame::Frame;
+use frame::{DirectMethod, Frame};
+use light_mesh::{LightMeshPasses, LightMeshShading};
+use mask_pool::MaskPool;
 use scatter::ScatterPasses;
 use surface::{FrameSurfaces, SceneSurfaces, SurfacePass};
 
@@ -53,6 +64,8 @@ pub struct Pipelines {
     queries: RayQueries,
     surfaces: SurfacePass,
     direct: DirectLightPass,
+    fill: FillPass,
+    light_mesh: LightMeshPasses,
     scatter: ScatterPasses,
     film: FilmPasses,
 }
@@ -64,6 +77,8 @@ impl Pipelines {
             queries: RayQueries::new(context),
             surfaces: SurfacePass::new(context),
             direct: DirectLightPass::new(context),
+            fill: FillPass::new(context),
+            light_mesh: LightMeshPasses::new(context),
             scatter: ScatterPasses::new(context),
             film: FilmPasses::new(context),
         }
@@ -81,6 +96,11 @@ pub struct GpuBackend {
     scene_surfaces: Option<(u64, SceneSurfaces)>,
     /// The last frame's placement, as uploaded.
     frame_surfaces: Option<FrameSurfaces>,
+    /// The light mesh's masks, resident across frames; made by the first
+    /// light-mesh frame.
+    mask_pool: Option<MaskPool>,
+    /// Bytes the mask pool may take.
+    mask_memory: usize,
 }
 
 impl GpuBackend {
@@ -95,7 +115,16 @@ impl GpuBackend {
             scene: None,
             scene_surfaces: None,
             frame_surfaces: None,
+            mask_pool: None,
+            mask_memory: LightMeshSettings::default().gpu_memory_mib << 20,
         })
+    }
+
+    /// Bounds the GPU memory the light mesh's masks may take (bricks no
+    /// level reads are evicted first; a level that reads more is refused).
+    pub fn limit_mask_memory(&mut self, bytes: usize) {
+        self.mask_memory = bytes;
+        self.mask_pool = None;
     }
 
     pub fn threads(&self) -> usize {
@@ -121,6 +150,7 @@ impl GpuBackend {
             context: &self.context,
             queries: &self.pipelines.queries,
             direct: &self.pipelines.direct,
+            fill: &self.pipelines.fill,
             scene,
         })
     }
@@ -174,33 +204,66 @@ impl GpuBackend {
         }
     }
 
-    /// Renders one frame; stage times, ray and point counts go to `stats`.
-    /// The light-mesh methods are the CPU backend's: refused before any
-    /// upload (settings refuse them before a run starts).
+    /// Renders one frame by `method`; stage times, ray and point counts go
+    /// to `stats`. The light-mesh methods shade from `light_mesh` (an
+    /// error without one), whose masks the backend keeps resident.
     pub fn render(
         &mut self,
         job: &FrameJob,
         method: Method,
+        light_mesh: Option<&mut LightMesh>,
         stats: &mut FrameStats,
     ) -> Result<Image, RenderError> {
-        if method.uses_light_mesh() {
-            return Err(GpuError::LightMeshOnGpu.into());
-        }
         let start = Instant::now();
         let lights = self.upload_frame(job)?;
+        let mut pool = match self.mask_pool.take() {
+            Some(pool) => pool,
+            None => MaskPool::new(&self.context, self.mask_memory)?,
+        };
+        let mut direct = match (method, light_mesh) {
+            (Method::Whitted, _) => DirectMethod::Whitted,
+            (Method::Area, _) => DirectMethod::Area,
+            (Method::Lmm | Method::Lmm1, Some(mesh)) => {
+                DirectMethod::LightMesh(Box::new(LightMeshShading::new(
+                    &self.context,
+                    mesh,
+                    &mut pool,
+                    method.tests_point_to_node(),
+                    job,
+                )?))
+            }
+            (Method::Lmm | Method::Lmm1, None) => return Err(RenderError::NoLightMesh(method)),
+        };
         let frame = self.frame(job, lights);
         stats.add_stage_time("upload", start.elapsed().as_secs_f64());
-        self.pool.install(|| {
+        let pixels = self.pool.install(|| {
             let mut pixels = Vec::with_capacity((job.width * job.height) as usize);
             for rows in bands(job) {
-                pixels.extend(frame.render_band(rows, method, stats)?);
+                pixels.extend(frame.render_band(rows, &mut direct, stats)?);
             }
-            Ok(Image {
-                width: job.width,
-                height: job.height,
-                pixels,
-            })
+            Ok::<_, RenderError>(pixels)
+        })?;
+        if let DirectMethod::LightMesh(light_mesh) = direct {
+            light_mesh.finish(&self.context, stats)?;
+        }
+        self.mask_pool = Some(pool);
+        Ok(Image {
+            width: job.width,
+            height: job.height,
+            pixels,
         })
+    }
+
+    /// Computes the masks `job`'s frame will need without shading it, on
+    /// the CPU workers (the CPU backend's stages): warming a farm's disk
+    /// cache needs no GPU.
+    pub fn warm(
+        &self,
+        job: &FrameJob,
+        mesh: &mut LightMesh,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
+        (self.pool).install(|| super::cpu::warm_light_mesh(job, mesh, stats))
     }
 
     /// The shading points of `rays`' closest hits as the GPU makes them
@@ -221,5 +284,6 @@ pub struct GpuPasses<'a> {
     pub context: &'a GpuContext,
     pub queries: &'a RayQueries,
     pub direct: &'a DirectLightPass,
+    pub fill: &'a FillPass,
     pub scene: &'a GpuScene,
 }

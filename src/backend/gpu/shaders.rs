@@ -12,7 +12,8 @@ pub enum Arithmetic {
 }
 
 /// The compute entry points: camera rays, the two ray queries, shading
-/// points, formula (1), the Whitted recursion's rays and their
+/// points, formula (1), formula (2) with its coverage of the points and
+/// the gathering of those it does not cover, the Whitted recursion's rays and their
 /// compaction, and the film.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Entry {
@@ -21,6 +22,10 @@ pub enum Entry {
     AnyHit,
     Surface,
     DirectLight,
+    LightMeshCoverage,
+    GatherPoints,
+    FillSegments,
+    LightMesh,
     Scatter,
     ScanBlocks,
     ScanSums,
@@ -31,12 +36,16 @@ pub enum Entry {
 
 impl Entry {
     #[cfg(test)]
-    pub const ALL: [Entry; 11] = [
+    pub const ALL: [Entry; 15] = [
         Entry::CameraRays,
         Entry::ClosestHit,
         Entry::AnyHit,
         Entry::Surface,
         Entry::DirectLight,
+        Entry::LightMeshCoverage,
+        Entry::GatherPoints,
+        Entry::FillSegments,
+        Entry::LightMesh,
         Entry::Scatter,
         Entry::ScanBlocks,
         Entry::ScanSums,
@@ -52,6 +61,10 @@ impl Entry {
             Entry::AnyHit => "any_hit",
             Entry::Surface => "surface",
             Entry::DirectLight => "direct_light",
+            Entry::LightMeshCoverage => "light_mesh_coverage",
+            Entry::GatherPoints => "gather_points",
+            Entry::FillSegments => "fill_segments",
+            Entry::LightMesh => "light_mesh",
             Entry::Scatter => "scatter",
             Entry::ScanBlocks => "scan_blocks",
             Entry::ScanSums => "scan_sums",
@@ -68,6 +81,45 @@ const PATH: &str = include_str!("shaders/path.wgsl");
 const SURFACE_POINT: &str = include_str!("shaders/surface_point.wgsl");
 const SCHLICK: &str = include_str!("shaders/schlick.wgsl");
 const ENVIRONMENT: &str = include_str!("shaders/environment.wgsl");
+/// Omega, formula (1) at a point, and the light mesh's nodes.
+const OMEGA: &str = include_str!("shaders/omega.wgsl");
+const FORMULA_ONE: &str = include_str!("shaders/formula_one.wgsl");
+const LIGHT_MESH_NODES: &str = include_str!("shaders/light_mesh_nodes.wgsl");
+const DIRECT_LIGHT: [&str; 6] = [
+    VECTOR,
+    SURFACE_POINT,
+    SCHLICK,
+    OMEGA,
+    FORMULA_ONE,
+    include_str!("shaders/direct_light.wgsl"),
+];
+const LIGHT_MESH_COVERAGE: [&str; 6] = [
+    VECTOR,
+    SURFACE_POINT,
+    SCHLICK,
+    OMEGA,
+    LIGHT_MESH_NODES,
+    include_str!("shaders/light_mesh_coverage.wgsl"),
+];
+/// The fill's segments, traced as formula (1)'s are.
+const FILL_SEGMENTS: [&str; 6] = [
+    VECTOR,
+    SURFACE_POINT,
+    SCHLICK,
+    OMEGA,
+    FORMULA_ONE,
+    include_str!("shaders/fill_segments.wgsl"),
+];
+/// Formula (2), which falls back to formula (1).
+const LIGHT_MESH: [&str; 7] = [
+    VECTOR,
+    SURFACE_POINT,
+    SCHLICK,
+    OMEGA,
+    FORMULA_ONE,
+    LIGHT_MESH_NODES,
+    include_str!("shaders/light_mesh.wgsl"),
+];
 /// What the passes that trace share: the world and its traversal.
 const TRACING: [&str; 3] = [
     include_str!("shaders/scene.wgsl"),
@@ -100,15 +152,14 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
                 include_str!("shaders/surface.wgsl"),
             ],
         ),
-        Entry::DirectLight => (
-            &TRACING,
-            &[
-                VECTOR,
-                SURFACE_POINT,
-                SCHLICK,
-                include_str!("shaders/direct_light.wgsl"),
-            ],
+        Entry::DirectLight => (&TRACING, &DIRECT_LIGHT),
+        Entry::LightMeshCoverage => (&[], &LIGHT_MESH_COVERAGE),
+        Entry::GatherPoints => (
+            &[],
+            &[SURFACE_POINT, include_str!("shaders/gather_points.wgsl")],
         ),
+        Entry::FillSegments => (&TRACING, &FILL_SEGMENTS),
+        Entry::LightMesh => (&TRACING, &LIGHT_MESH),
         Entry::Scatter => (
             &[],
             &[
@@ -174,7 +225,9 @@ mod tests {
         use crate::accel::flat::{FlatBinaryNode, FlatInstance, FlatWideNode};
         use crate::backend::gpu::camera::CameraRecord;
         use crate::backend::gpu::direct::{DirectLight, FlatLight};
+        use crate::backend::gpu::fill::FillSegment;
         use crate::backend::gpu::film::EnvironmentRecord;
+        use crate::backend::gpu::mask_pool::MeshHeader;
         use crate::backend::gpu::scene::Params;
         use crate::backend::gpu::surface::{
             MaterialRecord, MeshRecord, ObjectRecord, PathRay, SurfacePoint, TextureRecord,
@@ -255,6 +308,16 @@ mod tests {
                 "Environment",
                 size_of::<EnvironmentRecord>(),
                 vec![0, 12, 16, 28],
+            ),
+            (
+                "FillSegment",
+                size_of::<FillSegment>(),
+                vec![0, 12, 16, 20, 24, 28],
+            ),
+            (
+                "MeshHeader",
+                size_of::<MeshHeader>(),
+                vec![0, 12, 16, 20, 24, 28],
             ),
         ];
         for (name, size, offsets) in expected {

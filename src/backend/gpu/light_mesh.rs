@@ -1,0 +1,280 @@
+//! `--method lmm` and `lmm1` on the GPU: formula (2) at each level's
+//! shading points where they lie (`light_mesh.wgsl`), from the masks in
+//! the pool ([`MaskPool`]).
+//!
+//! The masks' authority stays the CPU's [`LightMesh`]: a level's points
+//! come back once, the CPU runs demand, fill and (for LMM1) enclosure on
+//! them exactly as the CPU backend does, and the pool takes the bricks
+//! the level reads that it lacks or holds stale. So invalidation, reuse
+//! across frames and the disk cache are the CPU's, unchanged, and the
+//! masks the shader reads are the CPU backend's bit for bit. What runs on
+//! the GPU is the per-point work: the half-ball, LMM's point-to-node
+//! segments, the counts and Omega, and formula (1) where the set is empty.
+
+use std::time::Instant;
+
+use glam::IVec3;
+
+use super::context::GpuContext;
+use super::direct::FrameLights;
+use super::fill::FillPass;
+use super::mask_pool::MaskPool;
+use super::pass::{answer_buffer, read_back, Dispatch, WorldPass, WorldUse, ITEMS};
+use super::scene::{storage, GpuScene};
+use super::shaders::Entry;
+use super::surface::{LevelBuffers, SurfacePoint};
+use crate::backend::RenderError;
+use crate::lightmesh::interpolate::PointCounts;
+use crate::lightmesh::{LightMesh, LightMeshStats};
+use crate::render::omega::LightLanes;
+use crate::render::surface::ShadingPoint;
+use crate::render::FrameJob;
+use crate::stats::FrameStats;
+
+/// Bindings beyond the points and answers: the lights, the points'
+/// reaching lights, the directory and the pool, formula (2)'s counters,
+/// the coverage's flags, and the points a gather reads from.
+const LIGHTS: u32 = 10;
+const REACH: u32 = 11;
+const DIRECTORY: u32 = 12;
+const POOL: u32 = 13;
+const COUNTS: u32 = 14;
+const FLAGS: u32 = 15;
+const GATHER_SOURCE: u32 = 10;
+
+/// The light mesh's pipelines, made once per run: coverage (which points
+/// the pool serves), gathering the points it does not, and formula (2).
+pub struct LightMeshPasses {
+    coverage: WorldPass,
+    gather: WorldPass,
+    shade: WorldPass,
+}
+
+impl LightMeshPasses {
+    pub fn new(context: &GpuContext) -> LightMeshPasses {
+        LightMeshPasses {
+            coverage: WorldPass::new(
+                context,
+                Entry::LightMeshCoverage,
+                WorldUse::None,
+                &[LIGHTS, DIRECTORY, POOL],
+                &[FLAGS],
+            ),
+            gather: WorldPass::new(
+                context,
+                Entry::GatherPoints,
+                WorldUse::None,
+                &[GATHER_SOURCE],
+                &[],
+            ),
+            shade: WorldPass::new(
+                context,
+                Entry::LightMesh,
+                WorldUse::Traces,
+                &[LIGHTS, REACH, DIRECTORY, POOL],
+                &[COUNTS],
+            ),
+        }
+    }
+}
+
+/// One frame's light-mesh shading: the CPU's light mesh, the GPU's pool,
+/// and what they did, summed over the frame's levels.
+pub struct LightMeshShading<'m> {
+    mesh: &'m mut LightMesh,
+    pool: &'m mut MaskPool,
+    point_to_node_tests: bool,
+    lanes: LightLanes,
+    /// What demand, fill and enclosure did.
+    work: LightMeshStats,
+    /// The shader's counters ([`PointCounts`] as (low, high) pairs).
+    counts: wgpu::Buffer,
+}
+
+/// The reaching lights of a level's points, uploaded for the shader.
+pub struct LevelReach {
+    reach: wgpu::Buffer,
+}
+
+impl<'m> LightMeshShading<'m> {
+    pub fn new(
+        context: &GpuContext,
+        mesh: &'m mut LightMesh,
+        pool: &'m mut MaskPool,
+        point_to_node_tests: bool,
+        job: &FrameJob,
+    ) -> Result<LightMeshShading<'m>, RenderError> {
+        Ok(LightMeshShading {
+            mesh,
+            pool,
+            point_to_node_tests,
+            lanes: LightLanes::new(&job.frame.lights),
+            work: LightMeshStats::default(),
+            counts: answer_buffer::<[u32; 8]>(context, "light-mesh counters", 1)?,
+        })
+    }
+
+    /// Makes every mask bit `level`'s points need valid in the light mesh
+    /// and resident in the pool: the coverage pass finds the points the
+    /// pool does not serve yet, and only those come back for the CPU's
+    /// demand, fill and enclosure stages (as the CPU backend runs them);
+    /// `encoder` (holding the level's points) is submitted on the way.
+    /// Returns the points' reaching lights and the encoder to go on with.
+    #[allow(clippy::too_many_arguments)]
+    pub fn prepare(
+        &mut self,
+        passes: &LightMeshPasses,
+        fill_pass: &FillPass,
+        context: &GpuContext,
+        job: &FrameJob,
+        scene: &GpuScene,
+        lights: &FrameLights,
+        level: &LevelBuffers,
+        mut encoder: wgpu::CommandEncoder,
+        stats: &mut FrameStats,
+    ) -> Result<(LevelReach, wgpu::CommandEncoder), RenderError> {
+        let start = Instant::now();
+        let p2n = self.point_to_node_tests;
+        self.work.bricks_uploaded += self.pool.refresh(context, self.mesh, p2n)?;
+        let light_words = MaskPool::light_words(self.mesh.masks().lights());
+        let reach = answer_buffer::<u32>(context, "reaching lights", level.count * light_words)?;
+        let point_words = level.count.div_ceil(32);
+        let flags = answer_buffer::<u32>(
+            context,
+            "coverage flags",
+            point_words + self.pool.capacity().div_ceil(32),
+        )?;
+        let (slots, directory) = self.pool.buffers();
+        let reads = [
+            (ITEMS, &level.points),
+            (LIGHTS, lights.buffer()),
+            (DIRECTORY, directory),
+            (POOL, slots),
+            (FLAGS, &flags),
+        ];
+        let dispatch = Dispatch::new(scene, level.count).with_lights(lights.count());
+        (passes.coverage).record(context, &mut encoder, dispatch, &reads, &reach);
+        let flags: Vec<u32> = read_back(
+            context,
+            encoder,
+            &flags,
+            point_words + self.pool.capacity().div_ceil(32),
+        )?;
+        let (unserved, read_slots) = flags.split_at(point_words);
+        let unserved: Vec<u32> = (unserved.iter().enumerate())
+            .flat_map(|(word, &bits)| {
+                crate::bits::set_bits(bits.into()).map(move |bit| (32 * word + bit) as u32)
+            })
+            .collect();
+        stats.add_stage_time("coverage", start.elapsed().as_secs_f64());
+
+        let records = self.gather(passes, context, scene, level, &unserved)?;
+        let points: Vec<ShadingPoint> = records
+            .iter()
+            .filter_map(SurfacePoint::shading_point)
+            .collect();
+
+        let start = Instant::now();
+        self.work.points_demanded += points.len() as u64;
+        let demand = self.mesh.demand(&points, &self.lanes)?;
+        stats.add_stage_time("demand", start.elapsed().as_secs_f64());
+
+        let start = Instant::now();
+        let fill = (self.mesh).fill_segments(&demand, &job.frame.lights, job.world)?;
+        let answers = fill_pass.trace(context, scene, lights, &fill.segments)?;
+        self.mesh
+            .merge_segments(&demand, &fill, &answers, &mut self.work);
+        stats.add_stage_time("fill", start.elapsed().as_secs_f64());
+
+        if !p2n {
+            let start = Instant::now();
+            self.work.nodes_probed += self.mesh.settle_enclosure(&demand, job.world);
+            stats.add_stage_time("enclosure", start.elapsed().as_secs_f64());
+        }
+
+        let start = Instant::now();
+        let bricks: Vec<IVec3> = demand.bricks.iter().map(|brick| brick.brick).collect();
+        let upload = (self.pool).admit(context, self.mesh, &bricks, read_slots, p2n)?;
+        self.work.bricks_uploaded += upload.bricks;
+        self.work.bricks_evicted += upload.evicted;
+        stats.add_stage_time("upload", start.elapsed().as_secs_f64());
+        let encoder = context.device.create_command_encoder(&Default::default());
+        Ok((LevelReach { reach }, encoder))
+    }
+
+    /// The points of `level` at `indices`, read back.
+    fn gather(
+        &self,
+        passes: &LightMeshPasses,
+        context: &GpuContext,
+        scene: &GpuScene,
+        level: &LevelBuffers,
+        indices: &[u32],
+    ) -> Result<Vec<SurfacePoint>, RenderError> {
+        if indices.is_empty() {
+            return Ok(Vec::new());
+        }
+        let indices_buffer = storage(context, "unserved points", indices)?;
+        let gathered = answer_buffer::<SurfacePoint>(context, "gathered points", indices.len())?;
+        let mut encoder = context.device.create_command_encoder(&Default::default());
+        let reads = [(ITEMS, &indices_buffer), (GATHER_SOURCE, &level.points)];
+        (passes.gather).record(
+            context,
+            &mut encoder,
+            Dispatch::new(scene, indices.len()),
+            &reads,
+            &gathered,
+        );
+        Ok(read_back(context, encoder, &gathered, indices.len())?)
+    }
+
+    /// Records formula (2) at `level`'s points into `direct`, with the
+    /// masks [`LightMeshShading::prepare`] made resident for them.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        passes: &LightMeshPasses,
+        context: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        lights: &FrameLights,
+        level: &LevelBuffers,
+        reach: &LevelReach,
+        direct: &wgpu::Buffer,
+    ) {
+        let (slots, directory) = self.pool.buffers();
+        let reads = [
+            (ITEMS, &level.points),
+            (LIGHTS, lights.buffer()),
+            (REACH, &reach.reach),
+            (DIRECTORY, directory),
+            (POOL, slots),
+            (COUNTS, &self.counts),
+        ];
+        let dispatch = Dispatch::new(scene, level.count).with_lights(lights.count());
+        (passes.shade).record(context, encoder, dispatch, &reads, direct);
+    }
+
+    /// The frame's light-mesh statistics, once its `shading_points` are
+    /// shaded; the fill's node-to-light segments go to the shadow rays.
+    pub fn finish(self, context: &GpuContext, stats: &mut FrameStats) -> Result<(), RenderError> {
+        let encoder = context.device.create_command_encoder(&Default::default());
+        let [counts]: [[u32; 8]; 1] = read_back(context, encoder, &self.counts, 1)?
+            .try_into()
+            .expect("one counter record was read");
+        let pair = |at: usize| counts[2 * at] as u64 | (counts[2 * at + 1] as u64) << 32;
+        let counts = PointCounts {
+            candidates: pair(0),
+            interp_set: pair(1),
+            p2n_tests: pair(2),
+            fallback: pair(3),
+            shadow_rays: 0,
+        };
+        stats.rays.shadow += self.work.fill_segments;
+        stats.lightmesh = Some(
+            self.mesh
+                .frame_stats(self.work, counts, stats.shading_points),
+        );
+        Ok(())
+    }
+}

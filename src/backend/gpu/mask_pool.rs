@@ -1,0 +1,399 @@
+//! The light mesh's masks on the GPU: a pool of brick slots in one buffer
+//! and a directory that finds a brick's slot by its coordinates.
+//!
+//! A slot holds one brick of the CPU's [`MaskStore`] as the GPU reads it:
+//! per node, which lights it sees and which of those bits are valid (the
+//! store's two layers folded as `NodeMask::visible` and `valid` fold
+//! them), in u32 words of 32 lights; then the brick's enclosure flags.
+//! Folding halves the store's four groups, and u32 words halve them again
+//! for scenes of up to 32 lights, so more bricks fit the adapter's
+//! largest binding.
+//!
+//! The store stays the authority: demand, fill, invalidation and the disk
+//! cache edit it, and the pool follows. Slots stay resident across frames;
+//! [`MaskPool::refresh`] copies the resident bricks edited since their
+//! copy (each edit moves a brick's revision) before a level's coverage
+//! pass reads them, and [`MaskPool::admit`] the bricks the level's demand
+//! named.
+//!
+//! The pool is bounded (`lightmesh.gpu_memory_mib`, and the adapter's
+//! largest binding): bricks the current level does not read are evicted,
+//! least recently read first; a level that reads more bricks than the
+//! bound holds is refused with the light mesh's error naming h and the
+//! limit. Which slot a brick gets never changes an image: the shaders find
+//! it through the directory.
+//!
+//! The directory is an open-addressing hash table (linear probing, at most
+//! half full), rebuilt on the CPU when the resident set changes and
+//! uploaded whole: a few thousand entries of 16 bytes. Its header carries
+//! the lattice and the interpolation's parameters.
+
+use bytemuck::{Pod, Zeroable};
+use glam::IVec3;
+use rustc_hash::FxHashMap;
+
+use super::context::{GpuContext, GpuError};
+use super::scene::storage;
+use crate::backend::RenderError;
+use crate::lightmesh::masks::{BrickEnclosure, MaskStore, BRICK_NODES, BRICK_WORDS};
+use crate::lightmesh::{LightMesh, LightMeshError};
+
+/// Groups of light words per node: visible, then valid.
+const GROUPS: usize = 2;
+
+/// `light_mesh.wgsl`'s `MeshHeader`: the lattice, the interpolation
+/// radius, the light words per node group, and the directory's size.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct MeshHeader {
+    pub origin: [f32; 3],
+    pub h: f32,
+    pub radius: f32,
+    /// u32 words per group of a node (`ceil(lights / 32)`).
+    pub light_words: u32,
+    /// Directory entries minus one (a power of two minus one).
+    pub entry_mask: u32,
+    /// 1 for LMM (point-to-node segments), 0 for LMM1.
+    pub point_to_node_tests: u32,
+}
+
+/// A directory entry: a brick's coordinates and its slot, or
+/// [`EMPTY_SLOT`] where no brick is.
+pub type Entry = [i32; 4];
+
+/// The slot field of an empty directory entry.
+pub const EMPTY_SLOT: i32 = -1;
+
+/// Where probing for `brick` starts (`light_mesh.wgsl`'s
+/// `directory_hash`): wrapping products of the coordinates with odd
+/// constants, mixed by xor.
+pub fn directory_hash(brick: IVec3) -> u32 {
+    (brick.x as u32).wrapping_mul(0x8da6_b343)
+        ^ (brick.y as u32).wrapping_mul(0xd816_3841)
+        ^ (brick.z as u32).wrapping_mul(0xcb1a_b31f)
+}
+
+/// A resident brick: its slot, the store revision it was copied at, and
+/// the last update that read it.
+#[derive(Clone, Copy, Debug)]
+struct Resident {
+    slot: u32,
+    revision: u64,
+    used: u64,
+}
+
+/// Bricks on the GPU, mirroring one [`MaskStore`].
+pub struct MaskPool {
+    /// The store mirrored and the u32 light words per node group; another
+    /// store (a new light mesh) empties the pool.
+    store: u64,
+    light_words: usize,
+    /// Bytes the slots may take.
+    limit: usize,
+    slots: wgpu::Buffer,
+    capacity: usize,
+    resident: FxHashMap<IVec3, Resident>,
+    /// Slots freed by eviction, reused before the pool grows.
+    free: Vec<u32>,
+    /// Slots handed out so far (below `capacity`).
+    allocated: usize,
+    /// Updates so far: the clock of `Resident::used`.
+    updates: u64,
+    directory: Option<(MeshHeader, wgpu::Buffer)>,
+    /// Whether the resident set changed since the directory was built.
+    directory_stale: bool,
+}
+
+/// What one update uploaded, for the stats.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PoolUpload {
+    pub bricks: u64,
+    pub evicted: u64,
+}
+
+impl MaskPool {
+    /// An empty pool whose slots may take `limit` bytes.
+    pub fn new(context: &GpuContext, limit: usize) -> Result<MaskPool, GpuError> {
+        Ok(MaskPool {
+            store: u64::MAX,
+            light_words: 0,
+            limit,
+            slots: slot_buffer(context, 16)?,
+            capacity: 0,
+            resident: FxHashMap::default(),
+            free: Vec::new(),
+            allocated: 0,
+            updates: 0,
+            directory: None,
+            directory_stale: true,
+        })
+    }
+
+    /// u32 light words per node group for `lights` lights.
+    pub fn light_words(lights: usize) -> usize {
+        lights.div_ceil(32).max(1)
+    }
+
+    /// Bytes of one slot with `light_words` u32 words per node group.
+    pub fn slot_bytes(light_words: usize) -> usize {
+        BRICK_NODES * GROUPS * light_words * size_of::<u32>() + 2 * BRICK_WORDS * size_of::<u64>()
+    }
+
+    /// Brings every resident brick up to `mesh`'s store (invalidation
+    /// edits bricks no demand names) and the directory up to the pool,
+    /// so that a coverage pass reads current masks; returns how many
+    /// bricks were copied.
+    pub fn refresh(
+        &mut self,
+        context: &GpuContext,
+        mesh: &LightMesh,
+        point_to_node_tests: bool,
+    ) -> Result<u64, GpuError> {
+        let store = mesh.masks();
+        if store.id() != self.store {
+            self.empty(store);
+        }
+        let slot_bytes = Self::slot_bytes(self.light_words) as u64;
+        let mut copied = 0;
+        for (&brick, resident) in &mut self.resident {
+            let revision = store.brick_revision(brick);
+            if revision.is_some_and(|revision| revision != resident.revision) {
+                resident.revision = revision.unwrap_or(resident.revision);
+                write_slot(
+                    context,
+                    &self.slots,
+                    resident.slot as u64 * slot_bytes,
+                    store,
+                    brick,
+                );
+                copied += 1;
+            }
+        }
+        self.build_directory(context, mesh, point_to_node_tests)?;
+        Ok(copied)
+    }
+
+    /// Makes `demanded` (sorted, no repeats) resident and current for a
+    /// level whose other points read the slots set in `read_slots` (a bit
+    /// per slot, from the coverage pass): bricks neither names are evicted,
+    /// least recently read first, when the bound is reached.
+    pub fn admit(
+        &mut self,
+        context: &GpuContext,
+        mesh: &LightMesh,
+        demanded: &[IVec3],
+        read_slots: &[u32],
+        point_to_node_tests: bool,
+    ) -> Result<PoolUpload, RenderError> {
+        let store = mesh.masks();
+        self.updates += 1;
+        let now = self.updates;
+        let is_read = |slot: u32| {
+            read_slots
+                .get(slot as usize / 32)
+                .is_some_and(|&bits| bits >> (slot % 32) & 1 == 1)
+        };
+        for resident in self.resident.values_mut() {
+            if is_read(resident.slot) {
+                resident.used = now;
+            }
+        }
+        let mut missing = 0;
+        for brick in demanded {
+            match self.resident.get_mut(brick) {
+                Some(resident) => resident.used = now,
+                None => missing += 1,
+            }
+        }
+        let slot_bytes = Self::slot_bytes(self.light_words);
+        let binding = context.limits.max_storage_buffer_binding_size as usize;
+        let limit_slots = self.limit.min(binding) / slot_bytes;
+        let reading = missing + self.resident.values().filter(|r| r.used == now).count();
+        if reading > limit_slots {
+            let mib = |bytes: usize| bytes as f64 / f64::from(1 << 20);
+            return Err(RenderError::LightMesh(LightMeshError::PoolTooSmall {
+                needed_mib: mib(reading * slot_bytes),
+                limit_mib: mib(self.limit),
+                h: mesh.lattice.h,
+            }));
+        }
+        let mut upload = PoolUpload {
+            evicted: self.make_room(missing, limit_slots),
+            ..PoolUpload::default()
+        };
+        let wanted = (self.allocated + missing.saturating_sub(self.free.len())).min(limit_slots);
+        if wanted > self.capacity {
+            self.grow(context, wanted.max(2 * self.capacity).min(limit_slots))?;
+        }
+        for &brick in demanded {
+            let Some(revision) = store.brick_revision(brick) else {
+                continue;
+            };
+            let resident = match self.resident.get_mut(&brick) {
+                Some(resident) => resident,
+                None => {
+                    let slot = self.free.pop().unwrap_or_else(|| {
+                        self.allocated += 1;
+                        (self.allocated - 1) as u32
+                    });
+                    self.directory_stale = true;
+                    self.resident.entry(brick).or_insert(Resident {
+                        slot,
+                        revision: u64::MAX,
+                        used: now,
+                    })
+                }
+            };
+            if resident.revision != revision {
+                resident.revision = revision;
+                let offset = resident.slot as u64 * slot_bytes as u64;
+                write_slot(context, &self.slots, offset, store, brick);
+                upload.bricks += 1;
+            }
+        }
+        self.build_directory(context, mesh, point_to_node_tests)?;
+        Ok(upload)
+    }
+
+    /// Slots the pool holds now: the bits of a coverage pass's
+    /// `read_slots`.
+    pub fn capacity(&self) -> usize {
+        self.capacity
+    }
+
+    /// The slots and the directory, for binding.
+    pub fn buffers(&self) -> (&wgpu::Buffer, &wgpu::Buffer) {
+        let (_, directory) = self
+            .directory
+            .as_ref()
+            .expect("the directory is built by every update");
+        (&self.slots, directory)
+    }
+
+    /// Forgets every brick: the pool now mirrors `store`.
+    fn empty(&mut self, store: &MaskStore) {
+        self.store = store.id();
+        self.light_words = Self::light_words(store.lights());
+        self.resident.clear();
+        self.free.clear();
+        self.allocated = 0;
+        self.capacity = 0;
+        self.directory_stale = true;
+    }
+
+    /// Frees slots for `missing` new bricks where the pool is at its
+    /// bound, evicting the least recently read bricks that the current
+    /// level does not read; returns how many were evicted.
+    fn make_room(&mut self, missing: usize, limit_slots: usize) -> u64 {
+        let available = self.free.len() + (limit_slots - self.allocated.min(limit_slots));
+        if missing <= available {
+            return 0;
+        }
+        let now = self.updates;
+        let mut idle: Vec<(u64, [i32; 3])> = (self.resident.iter())
+            .filter(|(_, resident)| resident.used < now)
+            .map(|(brick, resident)| (resident.used, brick.to_array()))
+            .collect();
+        idle.sort_unstable();
+        let evict = missing - available;
+        for &(_, brick) in &idle[..evict] {
+            let resident = self.resident.remove(&IVec3::from_array(brick));
+            self.free.extend(resident.map(|resident| resident.slot));
+        }
+        self.directory_stale = true;
+        evict as u64
+    }
+
+    /// A buffer of `capacity` slots holding the resident ones.
+    fn grow(&mut self, context: &GpuContext, capacity: usize) -> Result<(), GpuError> {
+        let slot_bytes = Self::slot_bytes(self.light_words);
+        let grown = context.checked("growing the mask pool", || {
+            slot_buffer(context, (capacity * slot_bytes) as u64)
+        })?;
+        if self.allocated > 0 {
+            let mut encoder = context.device.create_command_encoder(&Default::default());
+            let used = (self.allocated * slot_bytes) as u64;
+            encoder.copy_buffer_to_buffer(&self.slots, 0, &grown, 0, used);
+            context.queue.submit([encoder.finish()]);
+        }
+        self.slots = grown;
+        self.capacity = capacity;
+        Ok(())
+    }
+
+    /// Rebuilds and uploads the directory where the resident set or the
+    /// header changed.
+    fn build_directory(
+        &mut self,
+        context: &GpuContext,
+        mesh: &LightMesh,
+        point_to_node_tests: bool,
+    ) -> Result<(), GpuError> {
+        let entries = (2 * self.resident.len()).next_power_of_two().max(16);
+        let header = MeshHeader {
+            origin: mesh.lattice.origin.to_array(),
+            h: mesh.lattice.h,
+            radius: mesh.radius(),
+            light_words: self.light_words as u32,
+            entry_mask: entries as u32 - 1,
+            point_to_node_tests: point_to_node_tests as u32,
+        };
+        if !self.directory_stale && self.directory.as_ref().is_some_and(|(h, _)| *h == header) {
+            return Ok(());
+        }
+        let mut table = vec![[0, 0, 0, EMPTY_SLOT]; entries];
+        for (brick, resident) in &self.resident {
+            let mut at = directory_hash(*brick) as usize & (entries - 1);
+            while table[at][3] != EMPTY_SLOT {
+                at = (at + 1) & (entries - 1);
+            }
+            table[at] = [brick.x, brick.y, brick.z, resident.slot as i32];
+        }
+        let mut bytes = bytemuck::bytes_of(&header).to_vec();
+        bytes.extend_from_slice(bytemuck::cast_slice(&table));
+        let buffer = storage(context, "mask directory", &bytes)?;
+        self.directory = Some((header, buffer));
+        self.directory_stale = false;
+        Ok(())
+    }
+}
+
+fn slot_buffer(context: &GpuContext, bytes: u64) -> Result<wgpu::Buffer, GpuError> {
+    context.check_binding("mask pool", bytes)?;
+    Ok(context.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("mask pool"),
+        size: bytes.max(16),
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    }))
+}
+
+/// Writes `brick`'s folded node masks and enclosure flags from `store`
+/// into the slot at `offset`.
+fn write_slot(
+    context: &GpuContext,
+    slots: &wgpu::Buffer,
+    offset: u64,
+    store: &MaskStore,
+    brick: IVec3,
+) {
+    let Some(bits) = store.brick(brick) else {
+        return;
+    };
+    let light_words = MaskPool::light_words(store.lights());
+    let mut words = Vec::with_capacity(MaskPool::slot_bytes(light_words) / size_of::<u32>());
+    for slot in 0..BRICK_NODES {
+        let mask = store.slot_mask(bits, slot);
+        let half = |bits: u64, word: usize| (bits >> (32 * (word % 2))) as u32;
+        words.extend((0..light_words).map(|word| half(mask.visible(word / 2), word)));
+        words.extend((0..light_words).map(|word| half(mask.valid(word / 2), word)));
+    }
+    let BrickEnclosure { known, enclosed } = store.enclosure(brick);
+    words.extend_from_slice(bytemuck::cast_slice(&known));
+    words.extend_from_slice(bytemuck::cast_slice(&enclosed));
+    context
+        .queue
+        .write_buffer(slots, offset, bytemuck::cast_slice(&words));
+}

@@ -1,0 +1,56 @@
+// The light mesh's fill as a batch of node-to-light segments
+// (`lightmesh/segments.rs`): where the static bit is missing, the segment
+// against the static structure; then, where the node is open (its static
+// bit known visible or just found so) and the dynamic bit is missing,
+// against the dynamic objects. The segments are the CPU's shadow rays
+// from the node (`RenderLight::shadow_ray`) and the traversal is the
+// CPU's test, so every bit is the CPU fill's.
+
+struct FillSegment {
+    origin: vec3<f32>,
+    light: u32,
+    // TEST_STATIC | KNOWN_VISIBLE | TEST_DYNAMIC.
+    flags: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+const TEST_STATIC: u32 = 1u;
+const KNOWN_VISIBLE: u32 = 2u;
+const TEST_DYNAMIC: u32 = 4u;
+
+// Answer bits.
+const STATIC_BLOCKED: u32 = 1u;
+const DYNAMIC_TESTED: u32 = 2u;
+const DYNAMIC_BLOCKED: u32 = 4u;
+
+@group(0) @binding(1) var<storage, read> segments: array<FillSegment>;
+@group(0) @binding(7) var<storage, read_write> answers: array<u32>;
+
+@compute @workgroup_size(64)
+fn fill_segments(@builtin(global_invocation_id) id: vec3<u32>) {
+    let index = id.x;
+    if index >= params.item_count {
+        return;
+    }
+    let segment = segments[index];
+    let light = lights[segment.light];
+    let directional = light.directional != 0u;
+    let direction = select(light.origin - segment.origin, light.origin, directional);
+    let t_max = select(SHADOW_SEGMENT_END, bitcast<f32>(0x7f800000u), directional);
+    var answer = 0u;
+    var open = (segment.flags & KNOWN_VISIBLE) != 0u;
+    if (segment.flags & TEST_STATIC) != 0u {
+        var found = no_hit();
+        walk_static(segment.origin, direction, t_max, true, &found);
+        open = found.mesh == NO_MESH;
+        answer |= select(STATIC_BLOCKED, 0u, open);
+    }
+    if (segment.flags & TEST_DYNAMIC) != 0u && open {
+        var found = no_hit();
+        walk_dynamic(segment.origin, direction, t_max, true, &found);
+        answer |= DYNAMIC_TESTED | select(0u, DYNAMIC_BLOCKED, found.mesh != NO_MESH);
+    }
+    answers[index] = answer;
+}

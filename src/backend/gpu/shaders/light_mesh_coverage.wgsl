@@ -1,0 +1,74 @@
+// Which of a level's shading points the masks on the GPU already serve:
+// for each point, the lights that can reach it (the demand's reaching
+// lights, `LightLanes::reaching`), and whether every node of its half-ball
+// holds a valid bit for each of them in the pool, with its enclosure flag
+// settled where LMM1 will ask for it (a node blocked from one of them).
+// Only the points it leaves out go to the CPU for demand and fill: where
+// the masks are reused, a frame reads back a few points instead of all.
+
+@group(0) @binding(1) var<storage, read> points: array<SurfacePoint>;
+// Per point, `light_words` u32 of reaching-light bits.
+@group(0) @binding(7) var<storage, read_write> reach: array<u32>;
+// A bit per point, set where the pool does not serve it yet; then a bit
+// per pool slot, set where a point read the slot's brick (the CPU then
+// keeps those bricks when it must evict).
+@group(0) @binding(15) var<storage, read_write> flags: array<atomic<u32>>;
+
+// Whether the pool holds every bit of `reach` (from `base`) that formula
+// (2) will read at `node`.
+fn serves(mask: NodeMask, base: u32, light_words: u32) -> bool {
+    if !mask.found {
+        return false;
+    }
+    var blocked = 0u;
+    for (var word = 0u; word < light_words; word++) {
+        let wanted = reach[base + word];
+        let valid_bits = valid(mask, word);
+        if (valid_bits & wanted) != wanted {
+            return false;
+        }
+        blocked |= wanted & ~visible(mask, word);
+    }
+    return directory.header.point_to_node_tests != 0u || blocked == 0u || mask.settled;
+}
+
+@compute @workgroup_size(64)
+fn light_mesh_coverage(@builtin(global_invocation_id) id: vec3<u32>) {
+    let index = id.x;
+    if index >= params.item_count {
+        return;
+    }
+    let light_words = directory.header.light_words;
+    let base = index * light_words;
+    let surface = points[index];
+    var any_light = 0u;
+    let point = shade_point(surface);
+    for (var word = 0u; word < light_words; word++) {
+        var bits = 0u;
+        for (var bit = 0u; bit < 32u; bit++) {
+            let light = word * 32u + bit;
+            if surface.hit != 0u && light < params.light_count && arrival(point, lights[light]).reaches {
+                bits |= 1u << bit;
+            }
+        }
+        reach[base + word] = bits;
+        any_light |= bits;
+    }
+    if any_light == 0u {
+        return;
+    }
+    let slot_flags = (params.item_count + 31u) / 32u;
+    var marked = -1;
+    var nodes = walk(half_ball(point.position, point.geometric_normal));
+    while next_node(&nodes) {
+        if !serves(node_mask(nodes.node), base, light_words) {
+            atomicOr(&flags[index / 32u], 1u << (index % 32u));
+            return;
+        }
+        if cached_slot != marked {
+            marked = cached_slot;
+            let slot = u32(cached_slot);
+            atomicOr(&flags[slot_flags + slot / 32u], 1u << (slot % 32u));
+        }
+    }
+}

@@ -1,0 +1,213 @@
+// The light mesh's nodes as the GPU holds them: the lattice and the
+// interpolation radius (the directory's header), the half-ball around a
+// point (`Lattice::half_ball`, rounding as its rows of eight lanes do),
+// and each node's mask and enclosure flag, found through the directory in
+// the pool (`mask_pool.rs`), read as `NodeMask` reads them.
+
+struct MeshHeader {
+    origin: vec3<f32>,
+    h: f32,
+    radius: f32,
+    // u32 words of lights per group of a node's mask.
+    light_words: u32,
+    entry_mask: u32,
+    point_to_node_tests: u32,
+}
+
+struct Directory {
+    header: MeshHeader,
+    // (brick x, y, z, slot); slot -1: empty.
+    entries: array<vec4<i32>>,
+}
+
+@group(0) @binding(12) var<storage, read> directory: Directory;
+@group(0) @binding(13) var<storage, read> pool: array<u32>;
+const BRICK_NODES: u32 = 512u;
+// Per node, the lights it sees, then which of those bits are valid.
+const GROUPS: u32 = 2u;
+const VISIBLE: u32 = 0u;
+const VALID: u32 = 1u;
+// `MAX_KI` steps either side of the point and the point's own row.
+const MAX_SPAN: i32 = 17;
+// 8 f32 epsilons, 2^-20.
+const ON_PLANE_EPSILONS: f32 = 9.5367431640625e-7;
+
+// The nodes within `radius` of `p` on the side `n` faces, as
+// `Lattice::half_ball` bounds and tests them.
+struct HalfBall {
+    p: vec3<f32>,
+    n: vec3<f32>,
+    low: vec3<i32>,
+    span: vec3<i32>,
+    radius_squared: f32,
+    on_plane: f32,
+}
+
+fn half_ball(p: vec3<f32>, n: vec3<f32>) -> HalfBall {
+    let mesh = directory.header;
+    let h = mesh.h;
+    let from_origin = p - mesh.origin;
+    let local = vec3<f32>(div(from_origin.x, h), div(from_origin.y, h), div(from_origin.z, h));
+    let reach_steps = div(mesh.radius, h);
+    let low = vec3<i32>(ceil(local - vec3<f32>(reach_steps)));
+    let high = vec3<i32>(floor(local + vec3<f32>(reach_steps)));
+    let span = clamp(high - low + vec3<i32>(1), vec3<i32>(0), vec3<i32>(MAX_SPAN));
+    // `Lattice::on_plane_tolerance`: 8 epsilon times the magnitudes.
+    let magnitude = (max_abs(p) + max_abs(mesh.origin)) + mesh.radius;
+    let on_plane = mul(ON_PLANE_EPSILONS, magnitude);
+    return HalfBall(p, n, low, span, mul(mesh.radius, mesh.radius), on_plane);
+}
+
+fn max_abs(v: vec3<f32>) -> f32 {
+    return max(abs(v.x), max(abs(v.y), abs(v.z)));
+}
+
+// `node_position(node)[axis] - p[axis]` as the CPU rounds it.
+fn node_offset(origin: f32, index: i32, p: f32) -> f32 {
+    return (origin + mul(directory.header.h, f32(index))) - p;
+}
+
+fn node_position(node: vec3<i32>) -> vec3<f32> {
+    let mesh = directory.header;
+    return vec3<f32>(
+        mesh.origin.x + mul(mesh.h, f32(node.x)),
+        mesh.origin.y + mul(mesh.h, f32(node.y)),
+        mesh.origin.z + mul(mesh.h, f32(node.z)),
+    );
+}
+
+fn directory_hash(brick: vec3<i32>) -> u32 {
+    return (bitcast<u32>(brick.x) * 0x8da6b343u)
+        ^ (bitcast<u32>(brick.y) * 0xd8163841u)
+        ^ (bitcast<u32>(brick.z) * 0xcb1ab31fu);
+}
+
+// The pool slot of `brick`, or -1 where the pool holds none.
+fn brick_slot(brick: vec3<i32>) -> i32 {
+    let mask = directory.header.entry_mask;
+    var at = directory_hash(brick) & mask;
+    loop {
+        let entry = directory.entries[at];
+        if entry.w < 0 || all(entry.xyz == brick) {
+            return entry.w;
+        }
+        at = (at + 1u) & mask;
+    }
+    return -1;
+}
+
+// u32 words of a slot: the nodes' groups, then the enclosure flags
+// (`known`, then `enclosed`, 16 u32 each).
+fn slot_size() -> u32 {
+    return BRICK_NODES * GROUPS * directory.header.light_words + 32u;
+}
+
+// Where one node's mask is in the pool, and whether the node lies inside
+// closed geometry; `found` is false where its brick is not in the pool
+// (no bit of it was ever needed: it sees nothing).
+struct NodeMask {
+    found: bool,
+    base: u32,
+    // Whether the enclosure flag is known, and its value.
+    settled: bool,
+    enclosed: bool,
+}
+
+// The last brick looked up: a row of nodes mostly stays in one.
+var<private> cached_brick: vec3<i32>;
+var<private> cached_slot: i32 = -2;
+
+fn node_mask(node: vec3<i32>) -> NodeMask {
+    let brick = node >> vec3<u32>(3u);
+    if cached_slot == -2 || any(brick != cached_brick) {
+        cached_brick = brick;
+        cached_slot = brick_slot(brick);
+    }
+    if cached_slot < 0 {
+        return NodeMask(false, 0u, false, false);
+    }
+    let local = vec3<u32>(node & vec3<i32>(7));
+    let in_brick = (local.z * 8u + local.y) * 8u + local.x;
+    let slot_base = u32(cached_slot) * slot_size();
+    let words = directory.header.light_words;
+    let known = slot_base + BRICK_NODES * GROUPS * words + in_brick / 32u;
+    let bit = in_brick % 32u;
+    let settled = (pool[known] >> bit & 1u) == 1u;
+    let enclosed = (pool[known + 16u] >> bit & 1u) == 1u;
+    return NodeMask(true, slot_base + in_brick * GROUPS * words, settled, enclosed);
+}
+
+fn group_word(mask: NodeMask, group: u32, word: u32) -> u32 {
+    if !mask.found {
+        return 0u;
+    }
+    return pool[mask.base + group * directory.header.light_words + word];
+}
+
+// `NodeMask::visible`: the static bit set and no dynamic blocker.
+fn visible(mask: NodeMask, word: u32) -> u32 {
+    return group_word(mask, VISIBLE, word);
+}
+
+// `NodeMask::valid`: known in both layers.
+fn valid(mask: NodeMask, word: u32) -> u32 {
+    return group_word(mask, VALID, word);
+}
+
+
+// A walk over the half-ball's nodes in the CPU's order (k, j, i), one
+// node per `next_node`: rows whose centre misses the ball are skipped as
+// the CPU skips them, and each node is tested as its lanes test it.
+struct BallWalk {
+    ball: HalfBall,
+    // The next node's offsets from `ball.low`; x past the span: the row
+    // is done.
+    at: vec3<i32>,
+    // The current row's squared offsets along y and z, and the normal's
+    // terms along them.
+    dy2: f32,
+    dz2: f32,
+    n_yz: vec2<f32>,
+    // The node `next_node` found.
+    node: vec3<i32>,
+}
+
+fn walk(ball: HalfBall) -> BallWalk {
+    return BallWalk(ball, vec3<i32>(ball.span.x, -1, 0), 0.0, 0.0, vec2<f32>(0.0), vec3<i32>(0));
+}
+
+// Moves `w` to the next node of the half-ball; false when none is left.
+fn next_node(w: ptr<function, BallWalk>) -> bool {
+    let ball = (*w).ball;
+    let origin = directory.header.origin;
+    loop {
+        if (*w).at.x >= ball.span.x {
+            (*w).at.y += 1;
+            if (*w).at.y >= ball.span.y {
+                (*w).at.y = 0;
+                (*w).at.z += 1;
+            }
+            if (*w).at.z >= ball.span.z {
+                return false;
+            }
+            let dy = node_offset(origin.y, ball.low.y + (*w).at.y, ball.p.y);
+            let dz = node_offset(origin.z, ball.low.z + (*w).at.z, ball.p.z);
+            (*w).dy2 = mul(dy, dy);
+            (*w).dz2 = mul(dz, dz);
+            (*w).n_yz = vec2<f32>(mul(ball.n.y, dy), mul(ball.n.z, dz));
+            // (x² + y²) + z² ≥ y² + z² rounded too: no node of a row
+            // whose centre misses the ball is in it.
+            (*w).at.x = select(0, ball.span.x, (*w).dy2 + (*w).dz2 > ball.radius_squared);
+            continue;
+        }
+        let i = (*w).at.x;
+        (*w).at.x += 1;
+        let dx = node_offset(origin.x, ball.low.x + i, ball.p.x);
+        if (mul(dx, dx) + (*w).dy2) + (*w).dz2 <= ball.radius_squared
+            && (mul(ball.n.x, dx) + (*w).n_yz.x) + (*w).n_yz.y > ball.on_plane {
+            (*w).node = ball.low + vec3<i32>(i, (*w).at.y, (*w).at.z);
+            return true;
+        }
+    }
+    return false;
+}

@@ -1,0 +1,300 @@
+//! The fill (stage 4) as a flat list of node-to-light segments, for a
+//! tracer elsewhere: the GPU backend traces them in one compute pass.
+//!
+//! As in the CPU's fill ([`super::fill`]), a light's missing nodes in a
+//! brick are first settled together where the shaft from their box to the
+//! light meets no geometry: every one of them sees it (shafts settle only
+//! "nothing in the way", conservatively, so the bits are those the
+//! segments would give). At 64 lamps on the city that leaves about one
+//! segment in ten. The segments that remain carry both layers' tests,
+//! since the dynamic test depends on the static one: a node blocked by
+//! static geometry needs no dynamic bit. The tracer tests the static
+//! structure where the static bit is missing, then, where the node is
+//! open (its static bit known visible, or just found so) and the dynamic
+//! bit is missing, the dynamic objects.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::demand::{BrickDemand, Demand};
+use super::fill::MIN_SHAFT_NODES;
+use super::masks::{join, LayerUpdate, BRICK_NODES};
+use super::{LightMesh, LightMeshError, LightMeshStats};
+use crate::accel::shaft::Shaft;
+use crate::accel::World;
+use crate::bits::set_bits;
+use crate::render::light::RenderLight;
+
+/// One node-to-light segment of the fill.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment {
+    /// The node's position.
+    pub origin: Vec3,
+    pub light: u32,
+    /// The static bit is missing: test the static structure.
+    pub test_static: bool,
+    /// The static bit is known and visible.
+    pub known_visible: bool,
+    /// The dynamic bit is missing: test the dynamic objects where the node
+    /// is open.
+    pub test_dynamic: bool,
+}
+
+/// What the tracer found for one segment.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SegmentAnswer {
+    pub static_blocked: bool,
+    /// Whether the dynamic objects were tested (the node was open).
+    pub dynamic_tested: bool,
+    pub dynamic_blocked: bool,
+}
+
+/// Where a bit of the fill goes: the demand brick (its index), the node's
+/// slot, the light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Place {
+    brick: u32,
+    slot: u16,
+    light: u32,
+}
+
+impl Place {
+    /// The brick's update, the word and the bit this place's bit is.
+    fn locate<'u>(
+        &self,
+        updates: &'u mut [LayerUpdate],
+        words: usize,
+    ) -> (&'u mut LayerUpdate, usize, u64) {
+        let light = self.light as usize;
+        let word = self.slot as usize * words + light / 64;
+        (&mut updates[self.brick as usize], word, 1 << (light % 64))
+    }
+}
+
+/// A frame's fill: bits shafts settled, and segments for the tracer.
+#[derive(Clone, Debug, Default)]
+pub struct SegmentFill {
+    pub segments: Vec<Segment>,
+    /// Per segment, where its bits go.
+    places: Vec<Place>,
+    /// Static bits a clear shaft settled visible, and dynamic bits one
+    /// settled unblocked.
+    static_clear: Vec<Place>,
+    dynamic_clear: Vec<Place>,
+    shafts: u64,
+}
+
+/// One light word of one brick's missing bits, node by node.
+struct WordBits {
+    test_static: Vec<u64>,
+    known_visible: Vec<u64>,
+    test_dynamic: Vec<u64>,
+}
+
+impl LightMesh {
+    /// The fill of `demand`'s missing bits: groups settled by shafts, and
+    /// a segment for each bit left, in brick, node and light order.
+    /// Refuses (before allocating) when the masks would outgrow the memory
+    /// limit.
+    pub fn fill_segments(
+        &self,
+        demand: &Demand,
+        lights: &[RenderLight],
+        world: &World,
+    ) -> Result<SegmentFill, LightMeshError> {
+        self.check_memory(demand, lights.len())?;
+        let per_brick: Vec<SegmentFill> = (demand.bricks.par_iter().enumerate())
+            .map(|(index, brick)| {
+                self.brick_segments(index as u32, brick, demand.words, lights, world)
+            })
+            .collect();
+        let mut fill = SegmentFill::default();
+        for brick in per_brick {
+            fill.segments.extend(brick.segments);
+            fill.places.extend(brick.places);
+            fill.static_clear.extend(brick.static_clear);
+            fill.dynamic_clear.extend(brick.dynamic_clear);
+            fill.shafts += brick.shafts;
+        }
+        Ok(fill)
+    }
+
+    fn brick_segments(
+        &self,
+        index: u32,
+        brick: &BrickDemand,
+        words: usize,
+        lights: &[RenderLight],
+        world: &World,
+    ) -> SegmentFill {
+        let stored = self.masks.brick(brick.brick);
+        let positions: Vec<Vec3> = (0..BRICK_NODES)
+            .map(|slot| self.lattice.node_position(join(brick.brick, slot)))
+            .collect();
+        let mut fill = SegmentFill::default();
+        for word in 0..words {
+            let mut bits = WordBits {
+                test_static: vec![0; BRICK_NODES],
+                known_visible: vec![0; BRICK_NODES],
+                test_dynamic: vec![0; BRICK_NODES],
+            };
+            for slot in 0..BRICK_NODES {
+                let needed = brick.needed[slot * words + word];
+                let ((visible, valid), (_, dynamic_valid)) = stored.map_or(((0, 0), (0, 0)), |b| {
+                    let mask = self.masks.slot_mask(b, slot);
+                    (mask.static_layer(word), mask.dynamic_layer(word))
+                });
+                bits.test_static[slot] = needed & !valid;
+                bits.known_visible[slot] = visible & valid;
+                bits.test_dynamic[slot] =
+                    needed & !dynamic_valid & (bits.test_static[slot] | bits.known_visible[slot]);
+            }
+            let light = |bit: usize| &lights[word * 64 + bit];
+            let place = |slot: usize, bit: usize| Place {
+                brick: index,
+                slot: slot as u16,
+                light: (word * 64 + bit) as u32,
+            };
+            // Static shafts first: a clear one leaves its nodes open.
+            for bit in set_bits(bits.test_static.iter().fold(0, |all, b| all | b)) {
+                let members = group(&bits.test_static, bit);
+                if fill.shaft_is_clear(&members, &positions, light(bit), |shaft| {
+                    world.shaft_is_clear_static(shaft)
+                }) {
+                    for &slot in &members {
+                        bits.test_static[slot] &= !(1 << bit);
+                        bits.known_visible[slot] |= 1 << bit;
+                        fill.static_clear.push(place(slot, bit));
+                    }
+                }
+            }
+            // Dynamic shafts over the nodes known open.
+            let open_dynamic: Vec<u64> = (0..BRICK_NODES)
+                .map(|slot| bits.test_dynamic[slot] & bits.known_visible[slot])
+                .collect();
+            for bit in set_bits(open_dynamic.iter().fold(0, |all, b| all | b)) {
+                let members = group(&open_dynamic, bit);
+                let clear = !world.has_dynamic()
+                    || fill.shaft_is_clear(&members, &positions, light(bit), |shaft| {
+                        world.shaft_is_clear_dynamic(shaft)
+                    });
+                if clear {
+                    for &slot in &members {
+                        bits.test_dynamic[slot] &= !(1 << bit);
+                        fill.dynamic_clear.push(place(slot, bit));
+                    }
+                }
+            }
+            for (slot, &origin) in positions.iter().enumerate() {
+                for bit in set_bits(bits.test_static[slot] | bits.test_dynamic[slot]) {
+                    let at = 1u64 << bit;
+                    fill.segments.push(Segment {
+                        origin,
+                        light: (word * 64 + bit) as u32,
+                        test_static: bits.test_static[slot] & at != 0,
+                        known_visible: bits.known_visible[slot] & at != 0,
+                        test_dynamic: bits.test_dynamic[slot] & at != 0,
+                    });
+                    fill.places.push(place(slot, bit));
+                }
+            }
+        }
+        fill
+    }
+
+    /// Records the shafts' bits and the tracer's `answers` (parallel to
+    /// `fill.segments`) in the masks, and what the fill did in `stats`, as
+    /// [`LightMesh::fill`] records its own.
+    pub fn merge_segments(
+        &mut self,
+        demand: &Demand,
+        fill: &SegmentFill,
+        answers: &[SegmentAnswer],
+        stats: &mut LightMeshStats,
+    ) {
+        debug_assert_eq!(answers.len(), fill.segments.len());
+        let words = demand.words;
+        let mut updates: Vec<LayerUpdate> = (0..demand.bricks.len())
+            .map(|_| LayerUpdate::zeroed(BRICK_NODES * words))
+            .collect();
+        for place in &fill.static_clear {
+            let (update, word, bit) = place.locate(&mut updates, words);
+            update.static_computed[word] |= bit;
+            update.static_visible[word] |= bit;
+        }
+        for place in &fill.dynamic_clear {
+            let (update, word, bit) = place.locate(&mut updates, words);
+            update.dynamic_computed[word] |= bit;
+        }
+        for ((segment, answer), place) in fill.segments.iter().zip(answers).zip(&fill.places) {
+            let (update, word, bit) = place.locate(&mut updates, words);
+            if segment.test_static {
+                stats.fill_segments += 1;
+                update.static_computed[word] |= bit;
+                if !answer.static_blocked {
+                    update.static_visible[word] |= bit;
+                }
+            }
+            if answer.dynamic_tested {
+                stats.fill_segments += 1;
+                update.dynamic_computed[word] |= bit;
+                if answer.dynamic_blocked {
+                    update.dynamic_occluded[word] |= bit;
+                }
+            }
+        }
+        stats.fill_shafts += fill.shafts;
+        for (brick, update) in demand.bricks.iter().zip(&updates) {
+            let mut computed_bits = 0;
+            for slot in 0..BRICK_NODES {
+                let range = slot * words..(slot + 1) * words;
+                let computed: u64 = (update.static_computed[range.clone()].iter())
+                    .zip(&update.dynamic_computed[range])
+                    .map(|(s, d)| (s | d).count_ones() as u64)
+                    .sum();
+                stats.nodes_computed += (computed > 0) as u64;
+                computed_bits += computed;
+            }
+            let needed: u64 = brick.needed.iter().map(|w| w.count_ones() as u64).sum();
+            stats.bits_computed += computed_bits;
+            stats.bits_reused += needed - computed_bits;
+            if computed_bits > 0 {
+                self.masks.merge_brick(brick.brick, update);
+            }
+        }
+        stats.nodes_cached = self.masks.nodes_cached() as u64;
+    }
+}
+
+impl SegmentFill {
+    /// Whether the shaft from `members`' box to `light` is clear by
+    /// `is_clear`; only groups of [`MIN_SHAFT_NODES`] or more towards a
+    /// light with a position are worth a shaft.
+    fn shaft_is_clear(
+        &mut self,
+        members: &[usize],
+        positions: &[Vec3],
+        light: &RenderLight,
+        is_clear: impl Fn(&Shaft) -> bool,
+    ) -> bool {
+        let Some(apex) = light.position() else {
+            return false;
+        };
+        if members.len() < MIN_SHAFT_NODES {
+            return false;
+        }
+        let (min, max) = (members.iter())
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &i| {
+                (lo.min(positions[i]), hi.max(positions[i]))
+            });
+        self.shafts += 1;
+        is_clear(&Shaft::new(min, max, apex))
+    }
+}
+
+/// The slots whose `bits` hold `bit`.
+fn group(bits: &[u64], bit: usize) -> Vec<usize> {
+    (0..bits.len())
+        .filter(|&slot| bits[slot] >> bit & 1 == 1)
+        .collect()
+}
