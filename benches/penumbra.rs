@@ -61,6 +61,7 @@ fn scene(radius: f32) -> GltfBuilder {
             intensity: 20.0,
             range: None,
             radius: Some(radius),
+            group: None,
         })
         .expect("light");
     b.add_node(NodeDesc {

@@ -21,7 +21,7 @@ use lmanim::import;
 use lmanim::output::{self, ExrPrecision, FramePattern};
 use lmanim::schedule::{FrameSet, Timeline};
 use lmanim::sequence::{self, Job};
-use lmanim::settings::{BackendKind, LightMeshSettings, Method, Settings};
+use lmanim::settings::{Aov, BackendKind, LightMeshSettings, Method, Settings};
 use lmanim::stats::RunStats;
 use lmanim::study::{self, StudyOptions};
 
@@ -181,6 +181,19 @@ struct RenderArgs {
     /// Put every K-th frame of the run on the contact sheet [default: 1].
     #[arg(long, value_name = "K")]
     sheet_every: Option<u32>,
+    /// The frames the contact sheet is over (e.g. the whole shot, `0..240`);
+    /// those this run does not render are read back from their EXR files
+    /// [default: the run's frames].
+    #[arg(long, value_name = "RANGE")]
+    sheet_frames: Option<String>,
+    /// Write these layers into each EXR beside the beauty, comma-separated:
+    /// light (one RGB layer per light or group), albedo, normal, depth.
+    #[arg(long, value_name = "LIST")]
+    aovs: Option<String>,
+    /// A quick look: a quarter of the width and height, LMM1 on a coarse
+    /// lattice, PNG frames only (other flags still override).
+    #[arg(long)]
+    preview: bool,
     /// Write 32-bit float EXR channels instead of half floats.
     #[arg(long)]
     exr_float: bool,
@@ -387,6 +400,9 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
         Some(path) => Settings::load(path).map_err(Failure::bad_input)?,
         None => Settings::default(),
     };
+    if cli.preview {
+        settings = settings.preview();
+    }
     let flags = cli;
     settings.fps = flags.fps.unwrap_or(settings.fps);
     settings.method = flags.method.unwrap_or(settings.method);
@@ -403,6 +419,11 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     settings.contact_sheet = flags.contact_sheet.clone().or(settings.contact_sheet);
     settings.sheet_columns = flags.sheet_columns.unwrap_or(settings.sheet_columns);
     settings.sheet_every = flags.sheet_every.unwrap_or(settings.sheet_every);
+    settings.sheet_frames = flags.sheet_frames.clone().or(settings.sheet_frames);
+    if let Some(list) = &flags.aovs {
+        settings.aovs = Aov::parse_list(list)
+            .map_err(|fault| Failure::bad_input(anyhow::anyhow!("--aovs {list}: {fault}")))?;
+    }
     if let Some(h) = flags.h {
         let fault = LightMeshSettings::h_fault(h);
         let fault = fault.map(|fault| anyhow::anyhow!("--h {h}: {fault}"));

@@ -15,7 +15,7 @@ use crate::backend::{Backend, BackendError, CpuBackend, RenderError};
 use crate::import::{self, ImportError};
 use crate::lightmesh::persistent::PersistentLightMesh;
 use crate::lightmesh::{LightMesh, LightMeshError};
-use crate::output::{self, ContactSheet, FramePattern, OutputError};
+use crate::output::{self, FramePattern, OutputError, RenderedFrame, ShotSheet};
 use crate::render::frame::{CameraChoice, FrameScene, PlaceError, SceneBounds};
 use crate::render::FrameJob;
 use crate::scene::pose::Pose;
@@ -41,6 +41,8 @@ pub enum RunError {
     Clip { file: String, fault: String },
     #[error("the output pattern '{0}' has no '#' placeholder, so several frames would overwrite one file")]
     PatternWithoutPlaceholder(String),
+    #[error("sheet_frames: {0}")]
+    SheetFrames(String),
     #[error(transparent)]
     Output(#[from] OutputError),
     #[error(transparent)]
@@ -62,6 +64,7 @@ impl RunError {
                 | RunError::LightMesh { .. }
                 | RunError::Clip { .. }
                 | RunError::PatternWithoutPlaceholder(_)
+                | RunError::SheetFrames(_)
                 | RunError::WarmWithoutLightMesh(_)
                 | RunError::WarmWithoutCache
         )
@@ -103,9 +106,9 @@ pub struct Sequence {
     clips: ClipSelection,
     /// The previous frame's placement, to tell what changed.
     previous: Option<FrameScene>,
-    /// The previous frame's image, and whether the frame now placed is the
-    /// same picture (nothing changed), so it is copied.
-    last_image: Option<output::Image>,
+    /// The previous frame's image (and layers), and whether the frame now
+    /// placed is the same picture (nothing changed), so it is copied.
+    last_frame: Option<RenderedFrame>,
     still: bool,
 }
 
@@ -144,7 +147,7 @@ impl Sequence {
             scene_radius,
             clips: ClipSelection::All,
             previous: None,
-            last_image: None,
+            last_frame: None,
             still: false,
         })
     }
@@ -237,9 +240,21 @@ impl Sequence {
         settings: &Settings,
         stats: &mut FrameStats,
     ) -> Result<output::Image, RunError> {
-        if let (true, Some(image)) = (self.still, &self.last_image) {
+        Ok(self.render_frame(backend, placed, settings, stats)?.image)
+    }
+
+    /// Renders one frame with the AOV layers `settings` ask for, filling
+    /// `stats`.
+    pub fn render_frame(
+        &mut self,
+        backend: &mut Backend,
+        placed: &FrameScene,
+        settings: &Settings,
+        stats: &mut FrameStats,
+    ) -> Result<RenderedFrame, RunError> {
+        if let (true, Some(frame)) = (self.still, &self.last_frame) {
             stats.copied = true;
-            return Ok(image.clone());
+            return Ok(frame.clone());
         }
         let file = &self.scene_file;
         let light_mesh = if settings.method.uses_light_mesh() {
@@ -255,13 +270,13 @@ impl Sequence {
             None
         };
         let job = frame_job(&self.scene, &self.world, placed, settings);
-        let image = (backend.render(&job, settings.method, light_mesh, stats))
+        let frame = (backend.render(&job, settings.method, light_mesh, stats))
             .map_err(|error| run_error(file, error))?;
         if let Some(mesh_stats) = &mut stats.lightmesh {
             mesh_stats.bits_loaded = self.light_mesh.take_bits_loaded();
         }
-        self.last_image = Some(image.clone());
-        Ok(image)
+        self.last_frame = Some(frame.clone());
+        Ok(frame)
     }
 
     /// Computes the light-mesh masks the placed frame will need, without
@@ -335,7 +350,7 @@ fn frame_job<'a>(
     scene: &'a SceneDesc,
     world: &'a World,
     placed: &'a FrameScene,
-    settings: &Settings,
+    settings: &'a Settings,
 ) -> FrameJob<'a> {
     FrameJob {
         scene,
@@ -345,7 +360,22 @@ fn frame_job<'a>(
         height: settings.height,
         spp: settings.spp,
         max_depth: settings.max_depth,
+        environment: settings.environment(),
+        aovs: &settings.aovs,
     }
+}
+
+/// The contact sheet `settings` ask for at `path`: over `sheet_frames`
+/// when given, else over the run's `frames`.
+fn shot_sheet(path: &Path, settings: &Settings, frames: &FrameSet) -> Result<ShotSheet, RunError> {
+    let sheet_frames = match &settings.sheet_frames {
+        Some(text) => {
+            FrameSet::parse(text).map_err(|fault| RunError::SheetFrames(fault.to_string()))?
+        }
+        None => frames.clone(),
+    };
+    let (columns, every) = (settings.sheet_columns, settings.sheet_every);
+    Ok(ShotSheet::new(path, sheet_frames.frames(), columns, every))
 }
 
 /// The backend and the loaded scene `job` runs on, with its disk cache and
@@ -429,12 +459,10 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
         ..RunStats::default()
     };
     let timeline = Timeline { fps: settings.fps };
-    let mut sheet = (settings.contact_sheet.as_ref()).map(|path| {
-        (
-            path,
-            ContactSheet::new(settings.sheet_columns, settings.sheet_every),
-        )
-    });
+    let mut sheet = match &settings.contact_sheet {
+        Some(path) => Some(shot_sheet(Path::new(path), settings, job.frames)?),
+        None => None,
+    };
     for (index, &frame) in job.frames.frames().iter().enumerate() {
         let frame_started = Instant::now();
         let mut stats = FrameStats {
@@ -442,17 +470,20 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
             ..FrameStats::default()
         };
         let placed = sequence.advance(timeline.time_of(frame), settings, &mut stats)?;
-        let image = sequence.render(&mut backend, &placed, settings, &mut stats)?;
+        let rendered = sequence.render_frame(&mut backend, &placed, settings, &mut stats)?;
+        let image = &rendered.image;
 
         let write_started = Instant::now();
         let path = job.pattern.path_for(frame);
-        output::write_exr(&path, &image, settings.exr_precision)?;
+        if settings.exr {
+            output::write_layered_exr(&path, image, &rendered.aovs, settings.exr_precision)?;
+        }
         if settings.png {
             let path = job.pattern.png_path_for(frame);
-            output::write_png_preview(&path, &image, settings.exposure)?;
+            output::write_png_preview(&path, image, settings.exposure)?;
         }
-        if let Some((_, sheet)) = &mut sheet {
-            sheet.add(index, frame, &image);
+        if let Some(sheet) = &mut sheet {
+            sheet.add_rendered(frame, image);
         }
         stats.add_stage_time("output", write_started.elapsed().as_secs_f64());
         stats.seconds = frame_started.elapsed().as_secs_f64();
@@ -473,8 +504,10 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
     if let Err(error) = sequence.save_cache() {
         log::warn!("{error}; the light-mesh cache was not saved");
     }
-    if let Some((path, sheet)) = &sheet {
-        sheet.write(Path::new(path), settings.exposure)?;
+    if let Some(sheet) = sheet {
+        for unread in sheet.finish(job.pattern, settings.exposure)? {
+            log::warn!("{unread}; the contact sheet leaves that frame out");
+        }
     }
     run.total_seconds = started.elapsed().as_secs_f64();
     Ok(run)

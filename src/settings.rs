@@ -7,14 +7,24 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::lightmesh::lattice::MAX_KI;
 use crate::output::ExrPrecision;
+use crate::render::environment::Environment;
+use crate::schedule::FrameSet;
 
 /// The largest width or height accepted: beyond it a frame buffer no
 /// longer fits a sensible amount of memory (and EXR viewers choke).
 pub const MAX_DIMENSION: u32 = 32768;
+
+/// The coarsest derived lattice accepted (h·kI/R): beyond it one node's
+/// mask stands for a whole lamp's shadow.
+pub const MAX_COARSENESS: f32 = 16.0;
+
+/// The `--preview` preset's share of the settings' width and height.
+pub const PREVIEW_SCALE: u32 = 4;
 
 /// The deepest Whitted recursion accepted; deeper only costs time.
 pub const MAX_DEPTH: u32 = 64;
@@ -48,6 +58,8 @@ pub struct Settings {
     /// Animation clip to play (name or index); None plays all together.
     pub clip: Option<String>,
     pub exr_precision: ExrPrecision,
+    /// Write the EXR frames (`--preview` turns them off: PNG only).
+    pub exr: bool,
     /// Also write a tone-mapped PNG preview of every frame.
     pub png: bool,
     /// Exposure of the PNG previews and the contact sheet, in stops (EV):
@@ -58,8 +70,21 @@ pub struct Settings {
     pub contact_sheet: Option<String>,
     /// Thumbnails per row of the contact sheet.
     pub sheet_columns: u32,
-    /// The sheet shows every this many-th frame of the run.
+    /// The sheet shows every this many-th frame of its frames.
     pub sheet_every: u32,
+    /// The frames of the shot the sheet is over (a frame range such as
+    /// `0..240`); those the run does not render are read back from their
+    /// EXR files. None: the run's frames.
+    pub sheet_frames: Option<String>,
+    /// Linear RGB radiance of the pixels where camera rays meet nothing,
+    /// which makes frames opaque; None leaves them transparent black.
+    pub background: Option<[f32; 3]>,
+    /// Linear RGB radiance of a uniform sky lighting every surface's
+    /// diffuse part, unshadowed (`render/environment.rs`); None: no
+    /// ambient term.
+    pub ambient: Option<[f32; 3]>,
+    /// Layers written into each EXR frame beside the beauty (`--aovs`).
+    pub aovs: Vec<Aov>,
     /// Worker threads; None uses every core.
     pub threads: Option<usize>,
     /// Output frame pattern (`frame.####.exr`); None derives one from the
@@ -86,11 +111,16 @@ impl Default for Settings {
             camera: None,
             clip: None,
             exr_precision: ExrPrecision::Half,
+            exr: true,
             png: false,
             exposure: 0.0,
             contact_sheet: None,
             sheet_columns: 6,
             sheet_every: 1,
+            sheet_frames: None,
+            background: None,
+            ambient: None,
+            aovs: Vec::new(),
             threads: None,
             out: None,
             cache_dir: Some("cache".into()),
@@ -142,6 +172,53 @@ impl std::fmt::Display for Method {
     }
 }
 
+/// An arbitrary output variable: a layer of the EXR frames beside the
+/// beauty (`R`, `G`, `B`, `A`), for compositing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Aov {
+    /// One RGB layer per light, or per group of lights (`extras.group`):
+    /// `light.<name>.R/G/B`, with `other.R/G/B` for what no light sent
+    /// (emission, the ambient sky, the background); together they sum to
+    /// the beauty.
+    Light,
+    /// The base colour of what the camera sees (`albedo.R/G/B`).
+    Albedo,
+    /// Its shading normal in world space (`N.X/Y/Z`).
+    Normal,
+    /// Its distance in metres along the camera ray (`Z`; infinite where
+    /// the ray meets nothing).
+    Depth,
+}
+
+impl Aov {
+    pub const ALL: [Aov; 4] = [Aov::Light, Aov::Albedo, Aov::Normal, Aov::Depth];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Aov::Light => "light",
+            Aov::Albedo => "albedo",
+            Aov::Normal => "normal",
+            Aov::Depth => "depth",
+        }
+    }
+
+    /// A comma-separated list such as `light,depth`, or why it is not one.
+    pub fn parse_list(text: &str) -> Result<Vec<Aov>, String> {
+        let mut aovs = Vec::new();
+        for item in text.split(',').map(str::trim) {
+            let aov = (Aov::ALL.into_iter())
+                .find(|aov| aov.name() == item)
+                .ok_or_else(|| {
+                    let known: Vec<&str> = Aov::ALL.iter().map(|aov| aov.name()).collect();
+                    format!("unknown AOV '{item}'; the AOVs are {}", known.join(", "))
+                })?;
+            aovs.push(aov);
+        }
+        Ok(aovs)
+    }
+}
+
 /// Which backend runs a frame's stages. The CPU is the default, so a
 /// render works on any machine.
 #[derive(
@@ -176,6 +253,10 @@ pub struct LightMeshSettings {
     pub h: Option<f32>,
     /// Interpolation radius in units of `h` (the paper's kI).
     pub ki: f32,
+    /// h·kI/R of the lattice derived from the lamps when `h` is None: 1
+    /// makes the light mesh's transition the penumbra of an occluder
+    /// halfway to the lamp; more makes the lattice coarser and faster.
+    pub coarseness: f32,
     /// Memory the node masks may take, in MiB; a frame that would need
     /// more is refused with a clear error instead of exhausting memory.
     pub max_memory_mib: usize,
@@ -190,6 +271,7 @@ impl Default for LightMeshSettings {
         LightMeshSettings {
             h: None,
             ki: 2.5,
+            coarseness: 1.0,
             max_memory_mib: 4096,
             gpu_memory_mib: 1024,
         }
@@ -230,6 +312,37 @@ pub enum SettingsError {
 }
 
 impl Settings {
+    /// The `--preview` preset over these settings: a quarter of the width
+    /// and height, one sample a pixel, LMM1 on a coarse lattice (kI = 2.1,
+    /// h·kI/R = 1.5: a point on the accuracy study's Pareto front, see
+    /// STUDY.md) and PNG frames only.
+    pub fn preview(self) -> Settings {
+        Settings {
+            width: (self.width / PREVIEW_SCALE).max(1),
+            height: (self.height / PREVIEW_SCALE).max(1),
+            spp: 1,
+            method: Method::Lmm1,
+            exr: false,
+            png: true,
+            aovs: Vec::new(),
+            lightmesh: LightMeshSettings {
+                h: None,
+                ki: 2.1,
+                coarseness: 1.5,
+                ..self.lightmesh
+            },
+            ..self
+        }
+    }
+
+    /// The frame's background and ambient sky as the renderer takes them.
+    pub fn environment(&self) -> Environment {
+        Environment {
+            background: self.background.map(Vec3::from_array),
+            ambient: self.ambient.map(Vec3::from_array),
+        }
+    }
+
     /// Reads and validates a RON settings file.
     pub fn load(path: &Path) -> Result<Settings, SettingsError> {
         let text = std::fs::read_to_string(path).map_err(|source| SettingsError::Read {
@@ -295,8 +408,37 @@ impl Settings {
                 self.sheet_columns
             ));
         }
+        for (name, colour) in [("background", self.background), ("ambient", self.ambient)] {
+            if let Some(colour) = colour.filter(|c| c.iter().any(|v| !v.is_finite() || *v < 0.0)) {
+                return Err(format!(
+                    "{name} is {colour:?}; it must be three finite, non-negative radiances (linear RGB)"
+                ));
+            }
+        }
+        if let Some(Err(fault)) = self.sheet_frames.as_deref().map(FrameSet::parse) {
+            return Err(format!("sheet_frames: {fault}"));
+        }
         if self.sheet_every == 0 {
             return Err("sheet_every is 0; it must be at least 1".into());
+        }
+        if !self.exr && !self.aovs.is_empty() {
+            return Err("aovs go into the EXR frames, and exr is false".into());
+        }
+        if !self.exr && !self.png && self.contact_sheet.is_none() {
+            return Err(
+                "exr and png are false and there is no contact_sheet: the run would write nothing"
+                    .into(),
+            );
+        }
+        if let Some(aov) =
+            (self.aovs.iter()).find(|&&aov| self.aovs.iter().filter(|&&a| a == aov).count() > 1)
+        {
+            return Err(format!("aovs lists {} twice", aov.name()));
+        }
+        if self.backend == BackendKind::Gpu && !self.aovs.is_empty() {
+            return Err(
+                "aovs are written by backend cpu only: backend gpu writes the beauty".into(),
+            );
         }
         if self.threads == Some(0) {
             return Err("threads is 0; leave it out to use every core".into());
@@ -307,6 +449,12 @@ impl Settings {
         }
         if let Some(fault) = LightMeshSettings::ki_fault(lightmesh.ki) {
             return Err(format!("lightmesh.ki is {}; {fault}", lightmesh.ki));
+        }
+        if !(lightmesh.coarseness > 0.0 && lightmesh.coarseness <= MAX_COARSENESS) {
+            return Err(format!(
+                "lightmesh.coarseness is {}; it must be above 0 and at most {MAX_COARSENESS}",
+                lightmesh.coarseness
+            ));
         }
         if let Some((h, fault)) =
             (lightmesh.h).and_then(|h| Some((h, LightMeshSettings::h_fault(h)?)))

@@ -242,6 +242,7 @@ fn a_scene_without_a_camera_gets_a_framing_camera() {
             intensity: 20.0,
             range: None,
             radius: None,
+            group: None,
         })
         .unwrap();
     builder

@@ -215,6 +215,7 @@ fn lights_around(centre: Vec3) -> Vec<RenderLight> {
         intensity,
         range,
         radius: None,
+        group: None,
     };
     let centre = centre.as_dvec3();
     // Spots and directional lights shine down −Z of their node.
@@ -425,6 +426,7 @@ fn denormal_terms_are_the_cpus_or_flushed() {
             intensity,
             range: None,
             radius: None,
+            group: None,
         };
         RenderLight::place(&light, DMat4::from_translation(at), DVec3::ZERO, 0.0)
     };
@@ -563,6 +565,40 @@ fn skinned_and_morphing_animations_match_the_cpu() {
     let args = ["--method", "whitted", "--width", "48", "--height", "32"];
     assert_backends_agree(&anim_support::skinned(dir.path()), "0..4", &args);
     assert_backends_agree(&anim_support::morph(dir.path()), "0..4", &args);
+}
+
+/// The background and the ambient sky on both backends: the sky on every
+/// surface's diffuse part, at every depth of the recursion, and the
+/// background where camera samples miss (two samples a pixel, so edge
+/// pixels mix the two); the frames are also checked to have changed.
+#[test]
+fn background_and_ambient_sky_match_the_cpu() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let settings = dir.path().join("environment.ron");
+    std::fs::write(
+        &settings,
+        "(background: Some((0.2, 0.3, 0.5)), ambient: Some((0.05, 0.06, 0.08)))",
+    )
+    .expect("write settings");
+    let settings = settings.to_str().expect("UTF-8 path");
+    for method in ["whitted", "area", "lmm1"] {
+        let args = [
+            "--method", method, "--spp", "2", "--width", "40", "--height", "24",
+        ];
+        let with = [&args[..], &["--settings", settings]].concat();
+        assert_backends_agree(&sample("courtyard.gltf"), "0", &with);
+        let plain = tempfile::tempdir().expect("tempdir");
+        let lit = render(plain.path(), &sample("courtyard.gltf"), "cpu", "0", &with);
+        let unlit = render(plain.path(), &sample("courtyard.gltf"), "cpu", "0", &args);
+        let changed = (lit[0].pixels.iter().zip(&unlit[0].pixels))
+            .filter(|(a, b)| a != b)
+            .count();
+        assert!(
+            changed > lit[0].pixels.len() / 2,
+            "{method}: {changed} changed"
+        );
+        assert!(lit[0].pixels.iter().all(|p| p.w == 1.0), "{method}: opaque");
+    }
 }
 
 /// The sample courtyard as `edit` changes it, written to `dir/name`.
@@ -719,6 +755,8 @@ fn shading_points_made_on_the_gpu_are_the_cpus() {
                 height: size.1,
                 spp: 1,
                 max_depth: settings.max_depth,
+                environment: settings.environment(),
+                aovs: &[],
             };
             let gpu_points = gpu.shading_points(&job, &rays).expect("GPU points");
             let mut hits = 0;
@@ -1044,6 +1082,7 @@ fn gpu_fill_bits_equal_the_cpu_fill() {
         intensity: 5.0,
         range: None,
         radius: Some(0.1),
+        group: None,
     };
     let place = |light: &Light, at: Vec3| {
         RenderLight::place(

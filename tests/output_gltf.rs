@@ -59,6 +59,7 @@ fn sample() -> GltfBuilder {
             intensity: 12.0,
             range: Some(20.0),
             radius: Some(0.1),
+            group: None,
         })
         .unwrap();
     let spot = builder
@@ -72,6 +73,7 @@ fn sample() -> GltfBuilder {
             intensity: 30.0,
             range: None,
             radius: None,
+            group: None,
         })
         .unwrap();
     let camera = builder
@@ -280,6 +282,7 @@ fn bad_input_is_refused_with_a_name() {
             intensity: 1.0,
             range: None,
             radius: None,
+            group: None,
         })
         .unwrap_err()
         .to_string();

@@ -241,6 +241,7 @@ fn add_lamps(
             intensity: 300.0,
             range: params.lamp_range,
             radius: Some(params.lamp_radius),
+            group: None,
         })?;
         b.add_node(NodeDesc {
             translation: Vec3::new(

@@ -93,7 +93,7 @@ pub(super) fn material(material: &Material) -> Result<(Value, Vec<&'static str>)
 }
 
 /// A KHR_lights_punctual light object; the lamp radius goes to
-/// `extras.radius`.
+/// `extras.radius`, the group to `extras.group`.
 pub(super) fn light(light: &Light) -> Result<Value, String> {
     let mut numbers = light.color.to_array().to_vec();
     numbers.push(light.intensity);
@@ -139,8 +139,15 @@ pub(super) fn light(light: &Light) -> Result<Value, String> {
         }
         object.insert("range".into(), json!(range));
     }
+    let mut extras = Map::new();
     if let Some(radius) = light.radius {
-        object.insert("extras".into(), json!({ "radius": radius }));
+        extras.insert("radius".into(), json!(radius));
+    }
+    if let Some(group) = &light.group {
+        extras.insert("group".into(), json!(group));
+    }
+    if !extras.is_empty() {
+        object.insert("extras".into(), Value::Object(extras));
     }
     Ok(Value::Object(object))
 }

@@ -96,6 +96,7 @@ fn point_lamp(name: &str, colour: Vec3, intensity: f32, radius: f32) -> Light {
         intensity,
         range: None,
         radius: Some(radius),
+        group: None,
     }
 }
 
@@ -271,6 +272,7 @@ pub fn courtyard() -> Result<GltfBuilder, AuthoringError> {
         intensity: 150.0,
         range: None,
         radius: Some(0.1),
+        group: None,
     })?;
     b.add_node(NodeDesc {
         translation: spot_at,

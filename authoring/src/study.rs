@@ -157,6 +157,7 @@ impl Set {
             intensity,
             range,
             radius: Some(radius),
+            group: None,
         })?;
         self.builder.add_node(NodeDesc {
             translation: at,

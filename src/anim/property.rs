@@ -105,6 +105,7 @@ mod tests {
                 intensity: 1.0,
                 range: None,
                 radius: None,
+                group: None,
             }],
             cameras: vec![Projection::Perspective {
                 yfov: 1.0,

@@ -27,10 +27,11 @@ pub fn bands(job: &FrameJob) -> impl Iterator<Item = Range<u32>> {
 }
 
 /// The last stage: each sample's radiance is the sum of its points'
-/// `shaded` values in point order, each pixel the mean of its samples,
-/// with coverage (the share of samples whose camera ray hit something)
-/// as alpha. `primary` is how many of `points` are camera hits (they come
-/// first).
+/// `shaded` values in point order (or the frame's background where its
+/// camera ray met nothing), each pixel the mean of its samples, with
+/// coverage (the share of samples whose camera ray hit something) as
+/// alpha, or 1 behind a background. `primary` is how many of `points` are
+/// camera hits (they come first).
 pub fn resolve(
     job: &FrameJob,
     band_samples: usize,
@@ -51,15 +52,13 @@ pub fn resolve(
         .chunks(spp)
         .zip(covered.chunks(spp))
         .map(|(samples, hits)| {
-            let colour = samples.iter().sum::<Vec3>() / spp as f32;
+            let environment = &job.environment;
+            let colour = (samples.iter().zip(hits))
+                .map(|(&sent, &hit)| environment.sample_radiance(sent, hit))
+                .sum::<Vec3>()
+                / spp as f32;
             let coverage = hits.iter().filter(|&&hit| hit).count() as f32 / spp as f32;
-            colour.extend(coverage)
+            colour.extend(environment.alpha(coverage))
         })
         .collect()
-}
-
-/// What a shaded point sends towards its sample: its emission plus its
-/// direct light, times its path throughput.
-pub fn shaded_value(point: &ShadingPoint, direct: Vec3) -> Vec3 {
-    point.weight * (point.emitted() + direct)
 }

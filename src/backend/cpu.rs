@@ -16,13 +16,16 @@ use std::time::Instant;
 use glam::{UVec2, Vec3};
 use rayon::prelude::*;
 
-use super::band::{bands, resolve, shaded_value, TILE};
+use super::aov::AovFrame;
+use super::band::{bands, resolve, TILE};
 use super::sampling::{film_position, lamp_sample};
 use super::{thread_pool, BackendError, RenderError};
 use crate::accel::Ray;
 use crate::lightmesh::interpolate::{PointCounts, Scratch};
 use crate::lightmesh::{LightMesh, LightMeshStats};
-use crate::output::Image;
+use crate::output::{Image, RenderedFrame};
+use crate::render::environment::Environment;
+use crate::render::light_terms::{PointTerms, TermLog};
 use crate::render::omega::LightLanes;
 use crate::render::scatter::secondary_rays;
 use crate::render::surface::ShadingPoint;
@@ -47,20 +50,39 @@ impl CpuBackend {
         self.pool.current_num_threads()
     }
 
-    /// Renders one frame by `method`; stage times, ray and point counts go
-    /// to `stats`. The light-mesh methods shade from `light_mesh` (an error
-    /// without one); the other methods ignore it.
+    /// Renders one frame by `method`, with the AOV layers `job` asks for;
+    /// stage times, ray and point counts go to `stats`. The light-mesh
+    /// methods shade from `light_mesh` (an error without one); the other
+    /// methods ignore it.
     pub fn render(
+        &self,
+        job: &FrameJob,
+        method: Method,
+        light_mesh: Option<&mut LightMesh>,
+        stats: &mut FrameStats,
+    ) -> Result<RenderedFrame, RenderError> {
+        if AovFrame::wants_light_terms(job) {
+            self.render_keeping::<TermLog>(job, method, light_mesh, stats)
+        } else {
+            self.render_keeping::<Vec3>(job, method, light_mesh, stats)
+        }
+    }
+
+    /// [`CpuBackend::render`] with the shade stage keeping each point's
+    /// light terms as `T` does (their sum, or each term for the `light`
+    /// AOV).
+    fn render_keeping<T: PointTerms>(
         &self,
         job: &FrameJob,
         method: Method,
         mut light_mesh: Option<&mut LightMesh>,
         stats: &mut FrameStats,
-    ) -> Result<Image, RenderError> {
+    ) -> Result<RenderedFrame, RenderError> {
         let mut counts = PointCounts::default();
         let mut lightmesh = LightMeshStats::default();
-        let image = self.render_bands(job, stats, |lanes, rows, points, stats| {
-            let (shaded, band_counts) = shade_by_method(
+        let aovs = AovFrame::new(job);
+        let frame = self.render_bands(job, aovs, stats, |lanes, rows, points, stats| {
+            let (shaded, terms, band_counts) = shade_by_method::<T>(
                 job,
                 lanes,
                 rows,
@@ -71,12 +93,12 @@ impl CpuBackend {
                 &mut lightmesh,
             )?;
             counts += band_counts;
-            Ok::<_, RenderError>(shaded)
+            Ok::<_, RenderError>((shaded, terms))
         })?;
         if let (true, Some(mesh)) = (method.uses_light_mesh(), light_mesh) {
             stats.lightmesh = Some(mesh.frame_stats(lightmesh, counts, stats.shading_points));
         }
-        Ok(image)
+        Ok(frame)
     }
 
     /// Computes the masks `job`'s frame will need (hits, demand and fill,
@@ -95,51 +117,60 @@ impl CpuBackend {
     /// (formula (1) with V = 1): the light each pixel would get without
     /// shadows, against which the study measures how shadowed a pixel is.
     pub fn render_unshadowed(&self, job: &FrameJob, stats: &mut FrameStats) -> Image {
-        let unshadowed = self.render_bands(job, stats, |lanes, _, points, stats| {
-            let shade = |_: &mut (), _, point: &ShadingPoint| {
-                (
-                    whitted::unshadowed_light(point, lanes),
-                    PointCounts::default(),
-                )
+        let unshadowed = self.render_bands(job, None, stats, |lanes, _, points, stats| {
+            let shade = |_: &mut (), _, point: &ShadingPoint, sum: &mut Vec3| {
+                *sum = whitted::unshadowed_light(point, lanes);
+                PointCounts::default()
             };
-            Ok::<_, Infallible>(shade_stage(points, stats, || (), shade).0)
+            let (shaded, sums, _) = shade_stage(points, &job.environment, stats, || (), shade);
+            Ok::<_, Infallible>((shaded, sums))
         });
         match unshadowed {
-            Ok(image) => image,
+            Ok(frame) => frame.image,
             Err(never) => match never {},
         }
     }
 
     /// The frame band by band: hits (stages 1–2), then `shade` gives each
-    /// shading point its value, then samples are resolved to pixels.
-    fn render_bands<E: Send>(
+    /// shading point its value (and the terms it kept, one `T` per
+    /// [`SHADE_CHUNK`] points), then samples are resolved to pixels and,
+    /// where the job asks for them, to the `aovs` layers.
+    fn render_bands<E: Send, T: PointTerms>(
         &self,
         job: &FrameJob,
+        mut aovs: Option<AovFrame>,
         stats: &mut FrameStats,
         mut shade: impl FnMut(
                 &LightLanes,
                 std::ops::Range<u32>,
                 &[ShadingPoint],
                 &mut FrameStats,
-            ) -> Result<Vec<Vec3>, E>
+            ) -> Result<(Vec<Vec3>, Vec<T>), E>
             + Send,
-    ) -> Result<Image, E> {
+    ) -> Result<RenderedFrame, E> {
         self.pool.install(|| {
             let mut pixels = Vec::with_capacity((job.width * job.height) as usize);
             let lanes = LightLanes::new(&job.frame.lights);
             for rows in bands(job) {
                 let band_samples = ((rows.end - rows.start) * job.width * job.spp) as usize;
                 let (points, primary_count) = hits(job, rows.clone(), stats);
-                let shaded = shade(&lanes, rows, &points, stats)?;
+                let (shaded, terms) = shade(&lanes, rows.clone(), &points, stats)?;
                 stats.shading_points += points.len() as u64;
                 let start = Instant::now();
                 pixels.extend(resolve(job, band_samples, &points, primary_count, &shaded));
+                if let Some(aovs) = &mut aovs {
+                    aovs.add_band(job, rows, &points, primary_count, &terms, SHADE_CHUNK);
+                }
                 stats.add_stage_time("resolve", start.elapsed().as_secs_f64());
             }
-            Ok(Image {
+            let image = Image {
                 width: job.width,
                 height: job.height,
                 pixels,
+            };
+            Ok(RenderedFrame {
+                image,
+                aovs: aovs.map_or_else(Vec::new, AovFrame::into_layers),
             })
         })
     }
@@ -203,9 +234,10 @@ fn hits(
 }
 
 /// The shading stages of one band by `method` (for the light-mesh methods
-/// demand and fill first): each point's value, and what shading cost.
+/// demand and fill first): each point's value, the light terms kept as
+/// `T` keeps them, and what shading cost.
 #[allow(clippy::too_many_arguments)]
-fn shade_by_method(
+fn shade_by_method<T: PointTerms>(
     job: &FrameJob,
     lanes: &LightLanes,
     rows: std::ops::Range<u32>,
@@ -214,17 +246,18 @@ fn shade_by_method(
     light_mesh: Option<&mut LightMesh>,
     stats: &mut FrameStats,
     lightmesh: &mut LightMeshStats,
-) -> Result<(Vec<Vec3>, PointCounts), RenderError> {
+) -> Result<(Vec<Vec3>, Vec<T>, PointCounts), RenderError> {
     let lights = &job.frame.lights;
     let segments_before = lightmesh.fill_segments;
-    let (shaded, band_counts): (Vec<Vec3>, PointCounts) = match (method, light_mesh) {
+    let (shaded, terms, band_counts) = match (method, light_mesh) {
         (Method::Whitted, _) => shade_stage(
             points,
+            &job.environment,
             stats,
             || (),
-            |_, _, point| {
-                let (direct, shadow_rays) = whitted::direct_light(point, lanes, job.world);
-                (direct, PointCounts::shadow_rays(shadow_rays))
+            |_, _, point, terms: &mut T| {
+                let shadow_rays = whitted::direct_light_terms(point, lanes, job.world, terms);
+                PointCounts::shadow_rays(shadow_rays)
             },
         ),
         (Method::Area, _) => {
@@ -233,15 +266,14 @@ fn shade_by_method(
             let band_start = rows.start as u64 * job.width as u64 * job.spp as u64;
             shade_stage(
                 points,
+                &job.environment,
                 stats,
                 || (),
-                |_, _, point| {
+                |_, _, point, terms: &mut T| {
                     let sample = band_start + point.sample as u64;
-                    let (direct, shadow_rays) =
-                        area::direct_light(point, lights, job.world, |light| {
-                            lamp_sample(sample, job.spp, light, point.depth)
-                        });
-                    (direct, PointCounts::shadow_rays(shadow_rays))
+                    let lamp = |light| lamp_sample(sample, job.spp, light, point.depth);
+                    let shadow_rays = area::direct_light(point, lights, job.world, lamp, terms);
+                    PointCounts::shadow_rays(shadow_rays)
                 },
             )
         }
@@ -264,16 +296,23 @@ fn shade_by_method(
             let mesh = &*mesh;
             let point_to_node_tests = method.tests_point_to_node();
             let scratch = || Scratch::new(mesh);
-            shade_stage(points, stats, scratch, |scratch, index, point| {
-                mesh.shade(
-                    point,
-                    demand.reach_of(index),
-                    lanes,
-                    job.world,
-                    point_to_node_tests,
-                    scratch,
-                )
-            })
+            shade_stage(
+                points,
+                &job.environment,
+                stats,
+                scratch,
+                |scratch, index, point, terms: &mut T| {
+                    mesh.shade(
+                        point,
+                        demand.reach_of(index),
+                        lanes,
+                        job.world,
+                        point_to_node_tests,
+                        scratch,
+                        terms,
+                    )
+                },
+            )
         }
         (Method::Lmm | Method::Lmm1, None) => return Err(RenderError::NoLightMesh(method)),
     };
@@ -281,42 +320,53 @@ fn shade_by_method(
     // node-to-light ones and LMM's point-to-node tests.
     stats.rays.shadow +=
         band_counts.shadow_rays + band_counts.p2n_tests + lightmesh.fill_segments - segments_before;
-    Ok((shaded, band_counts))
+    Ok((shaded, terms, band_counts))
 }
 
-/// The last stage before resolve: every point's emission plus its direct
-/// light by `direct` (formula (1), (2) or the lamp estimate), weighted by
-/// its path throughput, and what shading them cost. `init` makes
-/// per-thread scratch space. Counts are integers, so summing them in any
-/// order gives the same totals.
-fn shade_stage<S>(
+/// Shading points per work item of the shade stage, and per `T` of the
+/// terms it keeps.
+const SHADE_CHUNK: usize = 1024;
+
+/// The last stage before resolve: every point's emission (and the
+/// `environment`'s ambient sky) plus its direct light, which `direct`
+/// (formula (1), (2) or the lamp estimate) hands light by light to a `T`,
+/// weighted by its path throughput; the `T` of each [`SHADE_CHUNK`]
+/// points, in order; and what shading them cost. `init` makes per-thread
+/// scratch space. Counts are integers, so summing them in any order gives
+/// the same totals.
+fn shade_stage<S, T: PointTerms>(
     points: &[ShadingPoint],
+    environment: &Environment,
     stats: &mut FrameStats,
     init: impl Fn() -> S + Send + Sync,
-    direct: impl Fn(&mut S, usize, &ShadingPoint) -> (Vec3, PointCounts) + Send + Sync,
-) -> (Vec<Vec3>, PointCounts) {
-    const CHUNK: usize = 1024;
+    direct: impl Fn(&mut S, usize, &ShadingPoint, &mut T) -> PointCounts + Send + Sync,
+) -> (Vec<Vec3>, Vec<T>, PointCounts) {
     let start = Instant::now();
     let mut shaded = vec![Vec3::ZERO; points.len()];
-    let counts = shaded
-        .par_chunks_mut(CHUNK)
-        .zip(points.par_chunks(CHUNK))
+    let chunks: Vec<(T, PointCounts)> = shaded
+        .par_chunks_mut(SHADE_CHUNK)
+        .zip(points.par_chunks(SHADE_CHUNK))
         .enumerate()
         .map_init(init, |scratch, (chunk, (out, points))| {
             let mut counts = PointCounts::default();
+            let mut terms = T::default();
             for (offset, (value, point)) in out.iter_mut().zip(points).enumerate() {
-                let (light, point_counts) = direct(scratch, chunk * CHUNK + offset, point);
-                *value = shaded_value(point, light);
-                counts += point_counts;
+                terms.begin_point();
+                counts += direct(scratch, chunk * SHADE_CHUNK + offset, point, &mut terms);
+                *value = environment.shaded_value(point, terms.sum());
             }
-            counts
+            (terms, counts)
         })
-        .reduce(PointCounts::default, |mut a, b| {
-            a += b;
-            a
-        });
+        .collect();
+    let mut counts = PointCounts::default();
+    let terms = (chunks.into_iter())
+        .map(|(terms, chunk_counts)| {
+            counts += chunk_counts;
+            terms
+        })
+        .collect();
     stats.add_stage_time("shade", start.elapsed().as_secs_f64());
-    (shaded, counts)
+    (shaded, terms, counts)
 }
 
 /// Stage 1: camera rays of every sample in the band, tile by tile.

@@ -7,6 +7,7 @@
 //! match the CPU's. Both run every method. The core (scene, accel,
 //! render) never knows which one runs it.
 
+mod aov;
 mod band;
 pub mod cpu;
 pub mod gpu;
@@ -16,7 +17,7 @@ pub use cpu::CpuBackend;
 pub use gpu::{GpuBackend, GpuError};
 
 use crate::lightmesh::{LightMesh, LightMeshError};
-use crate::output::Image;
+use crate::output::RenderedFrame;
 use crate::render::FrameJob;
 use crate::settings::{BackendKind, Method};
 use crate::stats::FrameStats;
@@ -101,8 +102,9 @@ impl Backend {
         }
     }
 
-    /// Renders one frame by `method`; stage times, ray and point counts go
-    /// to `stats`. The light-mesh methods shade from `light_mesh`, which
+    /// Renders one frame by `method` (with the AOV layers `job` asks for,
+    /// which only the CPU backend makes); stage times, ray and point
+    /// counts go to `stats`. The light-mesh methods shade from `light_mesh`, which
     /// the caller keeps across frames so that its masks are reused; the
     /// other methods ignore it.
     pub fn render(
@@ -111,10 +113,10 @@ impl Backend {
         method: Method,
         light_mesh: Option<&mut LightMesh>,
         stats: &mut FrameStats,
-    ) -> Result<Image, RenderError> {
+    ) -> Result<RenderedFrame, RenderError> {
         match self {
             Backend::Cpu(cpu) => cpu.render(job, method, light_mesh, stats),
-            Backend::Gpu(gpu) => gpu.render(job, method, light_mesh, stats),
+            Backend::Gpu(gpu) => Ok(gpu.render(job, method, light_mesh, stats)?.into()),
         }
     }
 }

@@ -1,6 +1,8 @@
-//! KHR_lights_punctual lights, with lmanim's one extra: `extras.radius`,
+//! KHR_lights_punctual lights, with lmanim's two extras: `extras.radius`,
 //! the radius in metres of the lamp a point light stands for, which sets the
-//! soft-shadow size (see ARCHITECTURE.md, "Conventions").
+//! soft-shadow size (see ARCHITECTURE.md, "Conventions"), and
+//! `extras.group`, the name of the layer of the `light` AOV it shares with
+//! the other lights of its group.
 
 use glam::Vec3;
 use gltf::khr_lights_punctual::Kind;
@@ -39,6 +41,7 @@ fn import_one(light: &gltf::khr_lights_punctual::Light) -> Result<Light, Fault> 
     if let Some(range) = range.filter(|&range| !(range.is_finite() && range > 0.0)) {
         return Err(fault(format!("range {range} is not finite and positive")));
     }
+    let extras = extras(light).map_err(fault)?;
     let kind = match light.kind() {
         Kind::Point => LightKind::Point,
         Kind::Directional => LightKind::Directional,
@@ -66,17 +69,32 @@ fn import_one(light: &gltf::khr_lights_punctual::Light) -> Result<Light, Fault> 
         color,
         intensity,
         range,
-        radius: radius(light.extras()).map_err(fault)?,
+        radius: radius(&extras).map_err(fault)?,
+        group: group(&extras).map_err(fault)?,
     })
 }
 
-/// `extras.radius` when the extras are an object that has it. Other extras
-/// belong to other tools and are left alone.
-fn radius(extras: &gltf::json::Extras) -> Result<Option<f32>, String> {
-    let Some(raw) = extras else { return Ok(None) };
-    let value: serde_json::Value =
-        serde_json::from_str(raw.get()).map_err(|error| format!("extras: {error}"))?;
-    let Some(radius) = value.get("radius") else {
+/// The light's extras as JSON (null where it has none). Extras lmanim does
+/// not read belong to other tools and are left alone.
+fn extras(light: &gltf::khr_lights_punctual::Light) -> Result<serde_json::Value, String> {
+    match light.extras() {
+        Some(raw) => serde_json::from_str(raw.get()).map_err(|error| format!("extras: {error}")),
+        None => Ok(serde_json::Value::Null),
+    }
+}
+
+/// `extras.group` when the extras are an object that has it.
+fn group(extras: &serde_json::Value) -> Result<Option<String>, String> {
+    match extras.get("group") {
+        None => Ok(None),
+        Some(serde_json::Value::String(group)) => Ok(Some(group.clone())),
+        Some(other) => Err(format!("extras.group {other} is not a string")),
+    }
+}
+
+/// `extras.radius` when the extras are an object that has it.
+fn radius(extras: &serde_json::Value) -> Result<Option<f32>, String> {
+    let Some(radius) = extras.get("radius") else {
         return Ok(None);
     };
     match radius.as_f64().map(|radius| radius as f32) {

@@ -8,7 +8,7 @@
 //! only the nodes inside closed geometry (`super::enclosure`). An empty
 //! set falls back to formula (1) with real shadow rays.
 
-use glam::{IVec3, Vec3};
+use glam::IVec3;
 
 use super::enclosure::blocks_some;
 use super::masks::BrickCache;
@@ -16,6 +16,7 @@ use super::{LightMesh, LightMeshStats};
 use crate::accel::offset::offset_ray_origin;
 use crate::accel::{Ray, World};
 use crate::bits::set_bits;
+use crate::render::light_terms::LightTerms;
 use crate::render::omega::{LightLanes, PointLanes, LANES};
 use crate::render::surface::ShadingPoint;
 use crate::render::whitted;
@@ -97,10 +98,12 @@ impl LightMesh {
         }
     }
 
-    /// Direct light at `point` by formula (2). `reach` holds the lights that
-    /// can reach the point (from the demand stage); every bit this reads was
-    /// filled from that demand. With `point_to_node_tests` (LMM) only the
-    /// nodes the point sees are interpolated; without (LMM1) all of them.
+    /// Direct light at `point` by formula (2), light by light into
+    /// `terms`, and what it cost. `reach` holds the lights that can reach
+    /// the point (from the demand stage); every bit this reads was filled
+    /// from that demand. With `point_to_node_tests` (LMM) only the nodes
+    /// the point sees are interpolated; without (LMM1) all of them.
+    #[allow(clippy::too_many_arguments)]
     pub fn shade(
         &self,
         point: &ShadingPoint,
@@ -109,7 +112,8 @@ impl LightMesh {
         world: &World,
         point_to_node_tests: bool,
         scratch: &mut Scratch,
-    ) -> (Vec3, PointCounts) {
+        terms: &mut impl LightTerms,
+    ) -> PointCounts {
         let mut counts = PointCounts::default();
         let Scratch {
             nodes,
@@ -144,10 +148,9 @@ impl LightMesh {
         let m = nodes.len();
         counts.interp_set = m as u64;
         if m == 0 {
-            let (radiance, shadow_rays) = whitted::direct_light(point, lights, world);
             counts.fallback = 1;
-            counts.shadow_rays = shadow_rays;
-            return (radiance, counts);
+            counts.shadow_rays = whitted::direct_light_terms(point, lights, world, terms);
+            return counts;
         }
 
         // Where every node agrees (far from shadow edges, the common case)
@@ -176,7 +179,6 @@ impl LightMesh {
         // Omega eight lights at a time, for the blocks where some node sees
         // a light; the sum runs in light order.
         let at = PointLanes::new(point);
-        let mut radiance = Vec3::ZERO;
         for (word, &lit) in any.iter().enumerate() {
             for block_in_word in 0..64 / LANES {
                 let first = block_in_word * LANES;
@@ -187,8 +189,9 @@ impl LightMesh {
                 let omega = lights.omega(&at, word * 64 / LANES + block_in_word);
                 for lane in set_bits((lit_lanes & omega.reaching).into()) {
                     let bit = first + lane;
+                    let light = word * 64 + bit;
                     if all[word] >> bit & 1 == 1 {
-                        radiance += omega.get(lane);
+                        terms.add(light, omega.get(lane));
                     } else {
                         let seen = visible
                             .iter()
@@ -196,11 +199,11 @@ impl LightMesh {
                             .step_by(words)
                             .filter(|&&seen| seen >> bit & 1 == 1)
                             .count();
-                        radiance += omega.get(lane) * (seen as f32 / m as f32);
+                        terms.add(light, omega.get(lane) * (seen as f32 / m as f32));
                     }
                 }
             }
         }
-        (radiance, counts)
+        counts
     }
 }

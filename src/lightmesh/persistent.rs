@@ -93,9 +93,9 @@ impl PersistentLightMesh {
             return Ok(self.mesh.insert(mesh));
         }
         let ki = settings.ki;
-        let h = settings
-            .h
-            .unwrap_or_else(|| spacing::default_h(lights, ki, 2.0 * scene_radius));
+        let h = settings.h.unwrap_or_else(|| {
+            spacing::default_h(lights, ki, settings.coarseness, 2.0 * scene_radius)
+        });
         let lattice = Lattice::new(h);
         let reach = scene_radius + ki * h;
         if !lattice.covers(glam::Vec3::ZERO, reach) {

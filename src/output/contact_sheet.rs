@@ -1,8 +1,9 @@
 //! Contact sheets: a shot's frames as labelled thumbnails on one PNG, for
-//! storyboard previews. Frames are shrunk as they are rendered, so a long
-//! shot holds thumbnails, not frames; the sheet is about as wide as one
-//! frame, tone-mapped like the previews, each thumbnail labelled with its
-//! frame number, and written once, atomically, at the end of the run.
+//! storyboard previews. Frames are shrunk as they are rendered (or read
+//! back from disk, `shot_sheet.rs`), so a long shot holds thumbnails, not
+//! frames; the sheet is about as wide as one frame, tone-mapped like the
+//! previews, each thumbnail labelled with its frame number, in frame
+//! order, and written once, atomically, at the end of the run.
 
 use std::path::Path;
 
@@ -33,12 +34,18 @@ impl ContactSheet {
         }
     }
 
-    /// Takes the `index`-th frame of the run, frame number `frame`, if it
-    /// is one the sheet shows. Each thumbnail is the first frame's size
-    /// divided by the columns (at least one pixel), box-filtered: every
-    /// thumbnail pixel is the mean of the frame's pixels under it.
+    /// Whether the sheet shows the `index`-th frame of its shot.
+    pub fn shows(&self, index: usize) -> bool {
+        index.is_multiple_of(self.every as usize)
+    }
+
+    /// Takes the `index`-th frame of the shot, frame number `frame`, if it
+    /// is one the sheet shows, in its place by frame number. Each
+    /// thumbnail is the first frame's size divided by the columns (at
+    /// least one pixel), box-filtered: every thumbnail pixel is the mean
+    /// of the frame's pixels under it.
     pub fn add(&mut self, index: usize, frame: u32, image: &Image) {
-        if !index.is_multiple_of(self.every as usize) {
+        if !self.shows(index) {
             return;
         }
         let columns = self.columns;
@@ -48,8 +55,8 @@ impl ContactSheet {
                 (image.height / columns).max(1),
             )
         });
-        self.thumbnails
-            .push((frame, thumbnail(image, width, height)));
+        let place = self.thumbnails.partition_point(|(shown, _)| *shown < frame);
+        (self.thumbnails).insert(place, (frame, thumbnail(image, width, height)));
     }
 
     /// The sheet: thumbnails left to right, top to bottom; cells after the
@@ -191,6 +198,17 @@ mod tests {
         let kept: Vec<u32> = sheet.thumbnails.iter().map(|(frame, _)| *frame).collect();
         assert_eq!(kept, [100, 103, 106]);
         assert_eq!(sheet.image().pixel(1, 0), Vec4::splat(3.0));
+    }
+
+    #[test]
+    fn frames_added_out_of_order_take_their_place() {
+        let mut sheet = ContactSheet::new(4, 1);
+        for (index, frame) in [(0, 7), (1, 3), (2, 5)] {
+            sheet.add(index, frame, &flat(4, 4, frame as f32));
+        }
+        let kept: Vec<u32> = sheet.thumbnails.iter().map(|(frame, _)| *frame).collect();
+        assert_eq!(kept, [3, 5, 7]);
+        assert_eq!(sheet.image().pixel(0, 0), Vec4::splat(3.0));
     }
 
     #[test]

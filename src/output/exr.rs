@@ -1,51 +1,83 @@
-//! OpenEXR frames: RGBA channels of linear radiance, ZIP-compressed scan
+//! OpenEXR frames: RGBA channels of linear radiance, and any AOV layers
+//! beside them as channels of the same part (`light.Lamp.R`, `N.X`, `Z`:
+//! the dot names the layer, as compositors read it), ZIP-compressed scan
 //! lines (lossless, well supported by compositors, and small on noisy
 //! renders), in half or single precision.
 
 use std::path::Path;
 
-use exr::prelude::{f16, Encoding, ReadChannels, ReadLayers, SpecificChannels, WritableImage};
+use exr::prelude::{
+    f16, AnyChannel, AnyChannels, Encoding, FlatSamples, ReadChannels, ReadLayers, SmallVec,
+    WritableImage,
+};
 use glam::Vec4;
 
-use super::{write_atomically, ExrPrecision, Image, OutputError};
+use super::{write_atomically, AovLayer, ExrPrecision, Image, OutputError};
 
 /// Writes `image` to `path` as an RGBA EXR, atomically.
 pub fn write_exr(path: &Path, image: &Image, precision: ExrPrecision) -> Result<(), OutputError> {
+    write_layered_exr(path, image, &[], precision)
+}
+
+/// Writes `image` (as `R`, `G`, `B`, `A`) and the `aovs` layers to `path`
+/// as one EXR, atomically.
+pub fn write_layered_exr(
+    path: &Path,
+    image: &Image,
+    aovs: &[AovLayer],
+    precision: ExrPrecision,
+) -> Result<(), OutputError> {
     if !image.has_consistent_size() {
         return Err(OutputError::image_size(path, image));
     }
-    let size = (image.width as usize, image.height as usize);
-    let at = |x: usize, y: usize| image.pixels[y * size.0 + x];
-    let encode_error = |error: exr::error::Error| OutputError::Encode {
-        path: path.to_path_buf(),
-        fault: error.to_string(),
+    let pixels = image.pixels.len();
+    if let Some(layer) =
+        (aovs.iter()).find(|layer| layer.values.len() != pixels * layer.channels.len())
+    {
+        return Err(OutputError::Encode {
+            path: path.to_path_buf(),
+            fault: format!(
+                "the layer {} holds {} values for {pixels} pixels",
+                layer.channels.join(","),
+                layer.values.len()
+            ),
+        });
+    }
+    let samples = |values: Vec<f32>| match precision {
+        ExrPrecision::Half => FlatSamples::F16(values.into_iter().map(f16::from_f32).collect()),
+        ExrPrecision::Float => FlatSamples::F32(values),
     };
-    write_atomically(path, |writer| match precision {
-        ExrPrecision::Half => {
-            let channels = SpecificChannels::rgba(|exr::math::Vec2(x, y)| {
-                let p = at(x, y);
-                (
-                    f16::from_f32(p.x),
-                    f16::from_f32(p.y),
-                    f16::from_f32(p.z),
-                    f16::from_f32(p.w),
-                )
-            });
-            exr::image::Image::from_encoded_channels(size, Encoding::SMALL_LOSSLESS, channels)
-                .write()
-                .to_buffered(writer)
-                .map_err(encode_error)
-        }
-        ExrPrecision::Float => {
-            let channels = SpecificChannels::rgba(|exr::math::Vec2(x, y)| {
-                let p = at(x, y);
-                (p.x, p.y, p.z, p.w)
-            });
-            exr::image::Image::from_encoded_channels(size, Encoding::SMALL_LOSSLESS, channels)
-                .write()
-                .to_buffered(writer)
-                .map_err(encode_error)
-        }
+    let beauty = ["R", "G", "B", "A"]
+        .into_iter()
+        .enumerate()
+        .map(|(k, name)| {
+            AnyChannel::new(name, samples(image.pixels.iter().map(|p| p[k]).collect()))
+        });
+    let layers = aovs.iter().flat_map(|layer| {
+        let stride = layer.channels.len();
+        (layer.channels.iter().enumerate()).map(move |(k, name)| {
+            let values = layer
+                .values
+                .iter()
+                .skip(k)
+                .step_by(stride)
+                .copied()
+                .collect();
+            AnyChannel::new(name.as_str(), samples(values))
+        })
+    });
+    let channels: SmallVec<[AnyChannel<FlatSamples>; 4]> = beauty.chain(layers).collect();
+    let size = (image.width as usize, image.height as usize);
+    let exr_image = exr::image::Image::from_encoded_channels(
+        size,
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(channels),
+    );
+    write_atomically(path, |writer| {
+        (exr_image.write().to_buffered(writer)).map_err(|error| OutputError::Encode {
+            path: path.to_path_buf(),
+            fault: error.to_string(),
+        })
     })
 }
 

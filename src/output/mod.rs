@@ -11,14 +11,16 @@ mod exr;
 mod label;
 mod pattern;
 mod png;
+mod shot_sheet;
 
 pub use atomic::write_atomically;
 pub use contact_sheet::ContactSheet;
 pub use error::OutputError;
-pub use exr::{read_exr, write_exr};
+pub use exr::{read_exr, write_exr, write_layered_exr};
 pub use label::FONT;
 pub use pattern::FramePattern;
 pub use png::{tone_map, write_png_preview, write_srgb_png};
+pub use shot_sheet::ShotSheet;
 
 use glam::Vec4;
 
@@ -53,6 +55,33 @@ impl Image {
     /// panic halfway through an encoder.
     fn has_consistent_size(&self) -> bool {
         self.pixels.len() as u64 == u64::from(self.width) * u64::from(self.height)
+    }
+}
+
+/// One layer of arbitrary output variables (AOVs) of a frame: named EXR
+/// channels, each pixel's values together, row-major like [`Image`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct AovLayer {
+    /// Full channel names, e.g. `light.Lamp.R` or `Z`.
+    pub channels: Vec<String>,
+    /// `channels.len()` values per pixel.
+    pub values: Vec<f32>,
+}
+
+/// What a backend renders of a frame: the beauty, and the AOV layers the
+/// run asked for (none by default).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderedFrame {
+    pub image: Image,
+    pub aovs: Vec<AovLayer>,
+}
+
+impl From<Image> for RenderedFrame {
+    fn from(image: Image) -> RenderedFrame {
+        RenderedFrame {
+            image,
+            aovs: Vec::new(),
+        }
     }
 }
 

@@ -21,43 +21,46 @@ use std::f32::consts::TAU;
 use glam::{Vec2, Vec3};
 
 use super::light::RenderLight;
+use super::light_terms::LightTerms;
 use super::surface::ShadingPoint;
 use crate::accel::offset::offset_ray_origin;
 use crate::accel::{Ray, World};
 
 /// Direct light at `point` from every light, spherical lamps sampled once
-/// each; `lamp_sample(i)` is the point of the unit square that light `i`'s
-/// sample comes from (stratified over the pixel's samples by the backend).
-/// Also returns how many shadow rays it traced.
+/// each, light by light into `terms`; `lamp_sample(i)` is the point of the
+/// unit square that light `i`'s sample comes from (stratified over the
+/// pixel's samples by the backend). Returns how many shadow rays it
+/// traced.
 pub fn direct_light(
     point: &ShadingPoint,
     lights: &[RenderLight],
     world: &World,
     lamp_sample: impl Fn(u32) -> Vec2,
-) -> (Vec3, u64) {
-    let mut radiance = Vec3::ZERO;
+    terms: &mut impl LightTerms,
+) -> u64 {
     let mut shadow_rays = 0;
-    light_samples(point, lights, lamp_sample, |sample| {
+    light_samples(point, lights, lamp_sample, |light, sample| {
         shadow_rays += 1;
         if !world.occluded(&sample.shadow_ray) {
-            radiance += sample.value;
+            terms.add(light, sample.value);
         }
     });
-    (radiance, shadow_rays)
+    shadow_rays
 }
 
-/// The samples [`direct_light`] weighs, visibility aside, in light order:
-/// one per light whose sample can bring anything. A backend that traces
-/// the shadow rays elsewhere sums the visible values in this order.
+/// The samples [`direct_light`] weighs, visibility aside, in light order,
+/// each with its light's index: one per light whose sample can bring
+/// anything. A backend that traces the shadow rays elsewhere sums the
+/// visible values in this order.
 pub fn light_samples(
     point: &ShadingPoint,
     lights: &[RenderLight],
     lamp_sample: impl Fn(u32) -> Vec2,
-    mut each: impl FnMut(LightSample),
+    mut each: impl FnMut(usize, LightSample),
 ) {
     for (index, light) in lights.iter().enumerate() {
         if let Some(sample) = sample_light(point, light, lamp_sample(index as u32)) {
-            each(sample);
+            each(index, sample);
         }
     }
 }

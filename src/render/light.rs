@@ -169,6 +169,7 @@ mod tests {
             intensity: 8.0,
             range,
             radius: None,
+            group: None,
         }
     }
 

@@ -5,9 +5,11 @@
 pub mod area;
 pub mod brdf;
 pub mod camera;
+pub mod environment;
 pub mod frame;
 pub mod lanes;
 pub mod light;
+pub mod light_terms;
 pub mod material;
 pub mod omega;
 pub mod scatter;
@@ -17,6 +19,8 @@ pub mod whitted;
 
 use crate::accel::World;
 use crate::scene::SceneDesc;
+use crate::settings::Aov;
+use environment::Environment;
 use frame::FrameScene;
 
 /// Everything a backend needs to render one frame.
@@ -32,4 +36,8 @@ pub struct FrameJob<'a> {
     pub spp: u32,
     /// Deepest Whitted recursion (0: primary hits only).
     pub max_depth: u32,
+    /// The background and the ambient sky (both off by default).
+    pub environment: Environment,
+    /// The AOV layers to make beside the beauty (the CPU backend's).
+    pub aovs: &'a [Aov],
 }

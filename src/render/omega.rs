@@ -348,6 +348,7 @@ mod tests {
                 intensity: 1.0 + i as f32,
                 range: (i % 3 == 1).then_some(2.0 + i as f32 * 0.3),
                 radius: None,
+                group: None,
             };
             // Spots and directional lights look down −Z of their node:
             // aim them at the point, or away.

@@ -5,6 +5,7 @@
 
 use glam::Vec3;
 
+use super::light_terms::LightTerms;
 use super::omega::{LightLanes, PointLanes, LANES};
 use super::surface::ShadingPoint;
 use crate::accel::{Ray, World};
@@ -14,36 +15,56 @@ use crate::bits::set_bits;
 /// rays it traced (none for lights that cannot reach the point anyway).
 pub fn direct_light(point: &ShadingPoint, lights: &LightLanes, world: &World) -> (Vec3, u64) {
     let mut radiance = Vec3::ZERO;
+    let shadow_rays = direct_light_terms(point, lights, world, &mut radiance);
+    (radiance, shadow_rays)
+}
+
+/// Formula (1)'s visible terms at `point`, light by light into `terms`;
+/// returns how many shadow rays it traced.
+pub fn direct_light_terms(
+    point: &ShadingPoint,
+    lights: &LightLanes,
+    world: &World,
+    terms: &mut impl LightTerms,
+) -> u64 {
     let mut shadow_rays = 0;
-    light_terms(point, lights, |omega, shadow_ray| {
+    light_terms(point, lights, |light, omega, shadow_ray| {
         shadow_rays += 1;
         if !world.occluded(&shadow_ray) {
-            radiance += omega;
+            terms.add(light, omega);
         }
     });
-    (radiance, shadow_rays)
+    shadow_rays
 }
 
 /// Direct light at `point` as formula (1) gives it with every light
 /// visible (V = 1): what the point would get without shadows.
 pub fn unshadowed_light(point: &ShadingPoint, lights: &LightLanes) -> Vec3 {
     let mut radiance = Vec3::ZERO;
-    light_terms(point, lights, |omega, _| radiance += omega);
+    light_terms(point, lights, |_, omega, _| radiance += omega);
     radiance
 }
 
 /// Formula (1)'s terms at `point`, visibility aside: for each light that
-/// can reach it, in light order, its Omega and the shadow segment that
+/// can reach it, in light order, its index, its Omega and the shadow segment that
 /// decides whether it counts. Omega comes eight lights at a time. A
 /// backend that traces the segments elsewhere sums the visible terms in
 /// this order, and gets [`direct_light`]'s bits.
-pub fn light_terms(point: &ShadingPoint, lights: &LightLanes, mut term: impl FnMut(Vec3, Ray)) {
+pub fn light_terms(
+    point: &ShadingPoint,
+    lights: &LightLanes,
+    mut term: impl FnMut(usize, Vec3, Ray),
+) {
     let at = PointLanes::new(point);
     for block in 0..lights.blocks() {
         let omega = lights.omega(&at, block);
         for lane in set_bits(omega.reaching.into()) {
-            let light = &lights.lights()[block * LANES + lane];
-            term(omega.get(lane), point.shadow_ray(light));
+            let index = block * LANES + lane;
+            term(
+                index,
+                omega.get(lane),
+                point.shadow_ray(&lights.lights()[index]),
+            );
         }
     }
 }

@@ -171,6 +171,9 @@ pub struct Light {
     /// Radius of the physical lamp this point light stands for (`extras.radius`
     /// in metres); sets the soft-shadow size in the light-mesh methods.
     pub radius: Option<f32>,
+    /// The light's group for compositing (`extras.group`): the lights of a
+    /// group share one layer of the `light` AOV.
+    pub group: Option<String>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -101,6 +101,7 @@ pub fn interpolations(dir: &Path) -> PathBuf {
             intensity: 10.0,
             range: None,
             radius: Some(0.1),
+            group: None,
         })
         .expect("light");
     let stepper = b
@@ -473,6 +474,7 @@ pub fn pointers(dir: &Path) -> PathBuf {
             intensity: 10.0,
             range: Some(4.0),
             radius: Some(0.1),
+            group: None,
         })
         .expect("light");
     let spot = b
@@ -486,6 +488,7 @@ pub fn pointers(dir: &Path) -> PathBuf {
             intensity: 5.0,
             range: None,
             radius: None,
+            group: None,
         })
         .expect("light");
     let camera = b

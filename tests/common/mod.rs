@@ -101,6 +101,7 @@ pub fn add_light(scene: &mut SceneDesc, kind: LightKind, intensity: f32, local: 
         intensity,
         range: None,
         radius: None,
+        group: None,
     });
     let node = add_node(scene, local);
     scene.nodes[node].light = Some(scene.lights.len() - 1);

@@ -1,21 +1,47 @@
 //! A band's film on the GPU: each level's shading points add what they
 //! send to their pixel samples (`accumulate.wgsl`), in point order, and
 //! the samples resolve into pixels (`resolve.wgsl`), as the CPU's
-//! `shaded_value` and `resolve` do; only the pixels and two counters come
-//! back.
+//! `Environment::shaded_value` and `resolve` do, with the frame's
+//! background and ambient sky; only the pixels and two counters come back.
 
+use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
 
 use super::context::{GpuContext, GpuError};
 use super::pass::{answer_buffer, read_back, Dispatch, WorldPass, WorldUse, ITEMS};
-use super::scene::GpuScene;
+use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::surface::LevelBuffers;
+use crate::render::environment::Environment;
 
 /// The direct light of a level's points, for the accumulation.
 const DIRECT: u32 = 10;
 /// The shading-point and shadow-segment counters.
 const COUNTERS: u32 = 18;
+/// The frame's background and ambient sky.
+const ENVIRONMENT: u32 = 22;
+
+/// `environment.wgsl`'s `Environment`: an [`Environment`] with flags for
+/// the parts that are on.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct EnvironmentRecord {
+    background: [f32; 3],
+    opaque: u32,
+    ambient: [f32; 3],
+    sky: u32,
+}
+
+impl From<&Environment> for EnvironmentRecord {
+    fn from(environment: &Environment) -> EnvironmentRecord {
+        EnvironmentRecord {
+            background: environment.background.unwrap_or_default().to_array(),
+            opaque: environment.background.is_some() as u32,
+            ambient: environment.ambient.unwrap_or_default().to_array(),
+            sky: environment.ambient.is_some() as u32,
+        }
+    }
+}
 
 /// The two pipelines, made once per run.
 pub struct FilmPasses {
@@ -30,18 +56,19 @@ impl FilmPasses {
                 context,
                 Entry::Accumulate,
                 WorldUse::None,
-                &[DIRECT],
+                &[DIRECT, ENVIRONMENT],
                 &[COUNTERS],
             ),
-            resolve: WorldPass::new(context, Entry::Resolve, WorldUse::None, &[], &[]),
+            resolve: WorldPass::new(context, Entry::Resolve, WorldUse::None, &[ENVIRONMENT], &[]),
         }
     }
 }
 
-/// One band's samples and counters.
+/// One band's samples and counters, and the frame's environment.
 pub struct Film {
     samples: wgpu::Buffer,
     counters: wgpu::Buffer,
+    environment: wgpu::Buffer,
     pixels: usize,
 }
 
@@ -53,11 +80,19 @@ pub struct Developed {
 }
 
 impl Film {
-    /// A film of `pixels` pixels of `spp` samples, all dark and uncovered.
-    pub fn new(context: &GpuContext, pixels: usize, spp: usize) -> Result<Film, GpuError> {
+    /// A film of `pixels` pixels of `spp` samples, all dark and uncovered,
+    /// in `environment`.
+    pub fn new(
+        context: &GpuContext,
+        pixels: usize,
+        spp: usize,
+        environment: &Environment,
+    ) -> Result<Film, GpuError> {
+        let environment = EnvironmentRecord::from(environment);
         Ok(Film {
             samples: answer_buffer::<[f32; 4]>(context, "pixel samples", pixels * spp)?,
             counters: answer_buffer::<[u32; 2]>(context, "counters", 1)?,
+            environment: storage(context, "environment", &[environment])?,
             pixels,
         })
     }
@@ -75,6 +110,7 @@ impl Film {
         let reads = [
             (ITEMS, &level.points),
             (DIRECT, direct),
+            (ENVIRONMENT, &self.environment),
             (COUNTERS, &self.counters),
         ];
         let count = level.count;
@@ -96,7 +132,7 @@ impl Film {
     ) -> Result<Developed, GpuError> {
         let pixels = answer_buffer::<[f32; 4]>(context, "pixels", self.pixels)?;
         let mut encoder = context.device.create_command_encoder(&Default::default());
-        let reads = [(ITEMS, &self.samples)];
+        let reads = [(ITEMS, &self.samples), (ENVIRONMENT, &self.environment)];
         let count = self.pixels;
         (passes.resolve).record(
             context,

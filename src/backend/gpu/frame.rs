@@ -69,7 +69,7 @@ impl Frame<'_> {
         let band_samples = pixels * job.spp as usize;
         let band_start = rows.start as u64 * job.width as u64 * job.spp as u64;
         context.checked("rendering a band", || {
-            let film = Film::new(context, pixels, job.spp as usize)?;
+            let film = Film::new(context, pixels, job.spp as usize, &job.environment)?;
 
             let start = Instant::now();
             let mut level = Vec::new();
@@ -250,7 +250,7 @@ impl Frame<'_> {
                     if let Some(point) = record.shading_point() {
                         let sample = band_start + point.sample as u64;
                         let lamp = |light| lamp_sample(sample, job.spp, light, point.depth);
-                        area::light_samples(&point, &job.frame.lights, lamp, |s| {
+                        area::light_samples(&point, &job.frame.lights, lamp, |_, s| {
                             samples.values.push(s.value);
                             samples.rays.push(s.shadow_ray);
                         });

@@ -80,6 +80,7 @@ const VECTOR: &str = include_str!("shaders/vector.wgsl");
 const PATH: &str = include_str!("shaders/path.wgsl");
 const SURFACE_POINT: &str = include_str!("shaders/surface_point.wgsl");
 const SCHLICK: &str = include_str!("shaders/schlick.wgsl");
+const ENVIRONMENT: &str = include_str!("shaders/environment.wgsl");
 /// Omega, formula (1) at a point, and the light mesh's nodes.
 const OMEGA: &str = include_str!("shaders/omega.wgsl");
 const FORMULA_ONE: &str = include_str!("shaders/formula_one.wgsl");
@@ -177,10 +178,11 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
             &[
                 VECTOR,
                 SURFACE_POINT,
+                ENVIRONMENT,
                 include_str!("shaders/accumulate.wgsl"),
             ],
         ),
-        Entry::Resolve => (&[], &[include_str!("shaders/resolve.wgsl")]),
+        Entry::Resolve => (&[], &[ENVIRONMENT, include_str!("shaders/resolve.wgsl")]),
     };
     [prelude, COMMON]
         .iter()
@@ -224,6 +226,7 @@ mod tests {
         use crate::backend::gpu::camera::CameraRecord;
         use crate::backend::gpu::direct::{DirectLight, FlatLight};
         use crate::backend::gpu::fill::FillSegment;
+        use crate::backend::gpu::film::EnvironmentRecord;
         use crate::backend::gpu::mask_pool::MeshHeader;
         use crate::backend::gpu::scene::Params;
         use crate::backend::gpu::surface::{
@@ -301,6 +304,11 @@ mod tests {
                 vec![0, 12, 16, 28, 32, 44, 48, 52],
             ),
             ("DirectLight", size_of::<DirectLight>(), vec![0, 12]),
+            (
+                "Environment",
+                size_of::<EnvironmentRecord>(),
+                vec![0, 12, 16, 28],
+            ),
             (
                 "FillSegment",
                 size_of::<FillSegment>(),

@@ -1,5 +1,6 @@
-// What a level's shading points send to their pixel samples (`band.rs`'s
-// `shaded_value` and `resolve`): each point's emission plus its direct
+// What a level's shading points send to their pixel samples
+// (`Environment::shaded_value` and `band.rs`'s `resolve`): each point's
+// emission (and the ambient sky on its diffuse part) plus its direct
 // light, times its path throughput, added to its sample's radiance in
 // point order. A sample's points are consecutive in a level, so the first
 // invocation of each run adds the whole run, in order, and no two
@@ -20,6 +21,16 @@ struct DirectLight {
 // Shading points, then shadow segments.
 @group(0) @binding(18) var<storage, read_write> counters: array<atomic<u32>, 2>;
 
+// `Environment::unlit`: emission, plus the sky times the diffuse albedo
+// (`environment::diffuse_albedo`) where there is a sky.
+fn unlit(point: SurfacePoint) -> vec3<f32> {
+    if environment.sky == 0u {
+        return point.emissive;
+    }
+    let albedo = scale3(point.base_color, mul(1.0 - point.transmission, 1.0 - point.metallic));
+    return point.emissive + mul3(environment.ambient, albedo);
+}
+
 @compute @workgroup_size(64)
 fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
@@ -39,7 +50,7 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
             continue;
         }
         let light = direct[i];
-        let shaded = point.emissive + light.radiance;
+        let shaded = unlit(point) + light.radiance;
         value = vec4<f32>(value.xyz + mul3(point.weight, shaded), select(value.w, 1.0, point.depth == 0u));
         hits += 1u;
         shadow_rays += light.shadow_rays;

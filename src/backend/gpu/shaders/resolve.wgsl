@@ -1,6 +1,7 @@
 // The band's pixels (`band.rs`'s `resolve`): each the mean of its
-// samples' radiance, summed in sample order, with the share of samples
-// a camera ray covered as alpha. Samples per pixel: the band's samples
+// samples' radiance (the background's where a camera ray met nothing and
+// there is one), summed in sample order, with the share of samples a
+// camera ray covered as alpha, or 1 behind a background. Samples per pixel: the band's samples
 // over its pixels.
 
 @group(0) @binding(1) var<storage, read> samples: array<vec4<f32>>;
@@ -17,9 +18,11 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
     var covered = 0u;
     for (var s = 0u; s < spp; s++) {
         let sample = samples[pixel * spp + s];
-        colour += sample.xyz;
-        covered += select(0u, 1u, sample.w != 0.0);
+        let hit = sample.w != 0.0;
+        colour += select(sample.xyz, environment.background, environment.opaque != 0u && !hit);
+        covered += select(0u, 1u, hit);
     }
     let n = f32(spp);
-    pixels[pixel] = vec4<f32>(div(colour.x, n), div(colour.y, n), div(colour.z, n), div(f32(covered), n));
+    let alpha = select(div(f32(covered), n), 1.0, environment.opaque != 0u);
+    pixels[pixel] = vec4<f32>(div(colour.x, n), div(colour.y, n), div(colour.z, n), alpha);
 }
