@@ -2,7 +2,8 @@
 # Starts a single-node Slurm on this machine (Debian's slurm-wlm and munge),
 # for trying farm/slurm/lmanim-array.sbatch without a cluster: one node
 # named after this host with all its cores, one partition `local`, state in
-# STATE_DIR (default /tmp/lmanim-slurm). Needs root; installs the two
+# STATE_DIR (default /tmp/lmanim-slurm); up to four jobs share a core, so
+# a few chunks run at once even on a small machine. Needs root; installs the two
 # packages when they are missing. `local-slurm.sh stop` stops it again.
 set -euo pipefail
 state=${STATE_DIR:-/tmp/lmanim-slurm}
@@ -55,7 +56,7 @@ SelectTypeParameters=CR_Core
 ReturnToService=2
 MpiDefault=none
 NodeName=$host CPUs=$cpus RealMemory=$memory State=UNKNOWN
-PartitionName=local Nodes=$host Default=YES MaxTime=INFINITE State=UP OverSubscribe=YES
+PartitionName=local Nodes=$host Default=YES MaxTime=INFINITE State=UP OverSubscribe=FORCE:4
 CONF
 # No cgroups: processes are tracked by their parent (containers often
 # have no writable cgroup tree).
