@@ -2,14 +2,18 @@
 //! shading points where they lie (`light_mesh.wgsl`), from the masks in
 //! the pool ([`MaskPool`]).
 //!
-//! The masks' authority stays the CPU's [`LightMesh`]: a level's points
-//! come back once, the CPU runs demand, fill and (for LMM1) enclosure on
-//! them exactly as the CPU backend does, and the pool takes the bricks
-//! the level reads that it lacks or holds stale. So invalidation, reuse
-//! across frames and the disk cache are the CPU's, unchanged, and the
-//! masks the shader reads are the CPU backend's bit for bit. What runs on
-//! the GPU is the per-point work: the half-ball, LMM's point-to-node
-//! segments, the counts and Omega, and formula (1) where the set is empty.
+//! The masks' authority stays the CPU's [`LightMesh`], so invalidation,
+//! reuse across frames and the disk cache are the CPU's, unchanged. Per
+//! level: a coverage pass (`light_mesh_coverage.wgsl`) makes the points'
+//! reaching lights and finds those whose every node already holds valid
+//! bits in the pool; only the others come back, for the CPU's demand. The
+//! bits they miss are settled by the CPU fill's shafts where those are
+//! clear and traced on the GPU otherwise ([`super::fill`]); LMM1's
+//! enclosure probes run on the CPU; the pool takes the bricks edited. So
+//! the masks the shader reads are the CPU backend's bit for bit, and what
+//! runs on the GPU is the per-point work: the half-ball, LMM's
+//! point-to-node segments, the counts and Omega, and formula (1) where the
+//! set is empty.
 
 use std::time::Instant;
 
@@ -91,7 +95,8 @@ pub struct LightMeshShading<'m> {
     counts: wgpu::Buffer,
 }
 
-/// The reaching lights of a level's points, uploaded for the shader.
+/// The reaching lights of a level's points, as the coverage pass made
+/// them, for formula (2).
 pub struct LevelReach {
     reach: wgpu::Buffer,
 }
