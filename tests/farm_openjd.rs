@@ -5,6 +5,8 @@
 //! `LMANIM_OPENJD`; elsewhere the test looks for `openjd` on the PATH and
 //! says so when there is none.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -87,27 +89,7 @@ fn the_template_checks_and_its_chunks_write_one_runs_frames() {
     // The warm step and three chunks of two frames.
     assert!(log.contains("Chunks run: 4"), "{log}");
 
-    let one_run = Command::new(lmanim)
-        .arg(courtyard())
-        .args([
-            "--frames",
-            "0-5",
-            "--method",
-            "lmm1",
-            "--no-cache",
-            "--quiet",
-            "--settings",
-        ])
-        .arg(&settings)
-        .arg("--out")
-        .arg(dir.path().join("one/frame.####.exr"))
-        .output()
-        .unwrap();
-    assert!(
-        one_run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&one_run.stderr)
-    );
+    common::cli::courtyard_in_one_run(&settings, &dir.path().join("one"));
     let (farm, one) = (
         frames_in(&dir.path().join("farm")),
         frames_in(&dir.path().join("one")),

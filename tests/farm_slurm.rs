@@ -5,6 +5,8 @@
 //! every worker's bits (no save lost when they save together). Off CI
 //! without a running Slurm the test says so and passes.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -74,20 +76,7 @@ fn three_chunks_at_once_write_one_runs_frames_and_one_cache() {
         .env("LMANIM", env!("CARGO_BIN_EXE_lmanim"))
         .current_dir(dir.path()));
 
-    run(Command::new(env!("CARGO_BIN_EXE_lmanim"))
-        .arg(repository("animations/courtyard.gltf"))
-        .args([
-            "--frames",
-            "0-5",
-            "--method",
-            "lmm1",
-            "--no-cache",
-            "--quiet",
-            "--settings",
-        ])
-        .arg(&settings)
-        .arg("--out")
-        .arg(dir.path().join("one/frame.####.exr")));
+    common::cli::courtyard_in_one_run(&settings, &dir.path().join("one"));
     for frame in 0..6 {
         let name = format!("frame.{frame:04}.exr");
         let farm = read_exr(&dir.path().join("farm").join(&name)).expect("the farm wrote it");
