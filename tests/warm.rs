@@ -9,6 +9,12 @@ use std::path::{Path, PathBuf};
 use common::cli::{assert_bad_input, lmanim};
 use lmanim::output::read_exr;
 
+/// The shot both the warm step and the renders take: the courtyard's
+/// first three frames, small, by LMM1.
+const SHOT: [&str; 8] = [
+    "--frames", "0..3", "--width", "80", "--height", "45", "--method", "lmm1",
+];
+
 fn courtyard() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("animations/courtyard.gltf")
 }
@@ -23,23 +29,16 @@ fn render(
     let scene = courtyard();
     let out = dir.join(format!("{name}.####.exr"));
     let stats = dir.join(format!("{name}.json"));
-    let mut args = vec![
-        scene.to_str().unwrap(),
-        "--frames",
-        "0..3",
-        "--width",
-        "80",
-        "--height",
-        "45",
-        "--method",
-        "lmm1",
+    let mut args = vec![scene.to_str().unwrap()];
+    args.extend(SHOT);
+    args.extend([
         "--exr-float",
         "--quiet",
         "--out",
         out.to_str().unwrap(),
         "--stats",
         stats.to_str().unwrap(),
-    ];
+    ]);
     match cache {
         Some(cache) => args.extend(["--cache", cache.to_str().unwrap()]),
         None => args.push("--no-cache"),
@@ -62,20 +61,10 @@ fn a_warmed_cache_gives_the_cold_frames_with_less_fill() {
     let dir = tempfile::tempdir().unwrap();
     let cache = dir.path().join("cache");
     let scene = courtyard();
-    let warm = lmanim(&[
-        "warm",
-        scene.to_str().unwrap(),
-        "--frames",
-        "0..3",
-        "--width",
-        "80",
-        "--height",
-        "45",
-        "--method",
-        "lmm1",
-        "--cache",
-        cache.to_str().unwrap(),
-    ]);
+    let mut args = vec!["warm", scene.to_str().unwrap()];
+    args.extend(SHOT);
+    args.extend(["--cache", cache.to_str().unwrap()]);
+    let warm = lmanim(&args);
     let report = String::from_utf8_lossy(&warm.stderr);
     assert!(warm.status.success(), "{report}");
     assert!(

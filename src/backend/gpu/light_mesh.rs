@@ -144,11 +144,8 @@ impl<'m> LightMeshShading<'m> {
         let light_words = MaskPool::light_words(self.mesh.masks().lights());
         let reach = answer_buffer::<u32>(context, "reaching lights", level.count * light_words)?;
         let point_words = level.count.div_ceil(32);
-        let flags = answer_buffer::<u32>(
-            context,
-            "coverage flags",
-            point_words + self.pool.capacity().div_ceil(32),
-        )?;
+        let flag_words = point_words + self.pool.capacity().div_ceil(32);
+        let flags = answer_buffer::<u32>(context, "coverage flags", flag_words)?;
         let (slots, directory) = self.pool.buffers();
         let reads = [
             (ITEMS, &level.points),
@@ -159,12 +156,7 @@ impl<'m> LightMeshShading<'m> {
         ];
         let dispatch = Dispatch::new(scene, level.count).with_lights(lights.count());
         (passes.coverage).record(context, &mut encoder, dispatch, &reads, &reach);
-        let flags: Vec<u32> = read_back(
-            context,
-            encoder,
-            &flags,
-            point_words + self.pool.capacity().div_ceil(32),
-        )?;
+        let flags: Vec<u32> = read_back(context, encoder, &flags, flag_words)?;
         let (unserved, read_slots) = flags.split_at(point_words);
         let unserved: Vec<u32> = (unserved.iter().enumerate())
             .flat_map(|(word, &bits)| {
