@@ -18,6 +18,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use lmanim::anim::inspect::inspect;
 use lmanim::anim::ClipSelection;
 use lmanim::import;
+use lmanim::lightmesh::kernel::Kernel;
 use lmanim::output::{self, ExrPrecision, FramePattern};
 use lmanim::schedule::{FrameSet, Timeline};
 use lmanim::sequence::{self, Job};
@@ -164,6 +165,10 @@ struct RenderArgs {
     /// Light-mesh interpolation radius in lattice steps (the paper's kI).
     #[arg(long, value_name = "K", allow_negative_numbers = true)]
     ki: Option<f32>,
+    /// How formula (2) weighs the nodes: box (the paper) or smooth
+    /// [default: box].
+    #[arg(long, value_enum)]
+    kernel: Option<Kernel>,
     /// Also write a tone-mapped sRGB PNG preview beside each frame.
     #[arg(long)]
     png: bool,
@@ -435,6 +440,9 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
         let fault = fault.map(|fault| anyhow::anyhow!("--ki {ki}: {fault}"));
         fault.map_or(Ok(()), |fault| Err(Failure::bad_input(fault)))?;
         settings.lightmesh.ki = ki;
+    }
+    if let Some(kernel) = flags.kernel {
+        settings.lightmesh.kernel = kernel;
     }
     if flags.no_cache {
         settings.cache_dir = None;

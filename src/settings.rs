@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
+use crate::lightmesh::kernel::Kernel;
 use crate::lightmesh::lattice::MAX_KI;
 use crate::output::ExrPrecision;
 use crate::render::environment::Environment;
@@ -253,6 +254,9 @@ pub struct LightMeshSettings {
     pub h: Option<f32>,
     /// Interpolation radius in units of `h` (the paper's kI).
     pub ki: f32,
+    /// How formula (2) weighs the nodes within the radius: `box` counts
+    /// them alike (the paper), `smooth` by (1 − d²/r²)².
+    pub kernel: Kernel,
     /// h·kI/R of the lattice derived from the lamps when `h` is None: 1
     /// makes the light mesh's transition the penumbra of an occluder
     /// halfway to the lamp; more makes the lattice coarser and faster.
@@ -271,6 +275,7 @@ impl Default for LightMeshSettings {
         LightMeshSettings {
             h: None,
             ki: 2.5,
+            kernel: Kernel::default(),
             coarseness: 1.0,
             max_memory_mib: 4096,
             gpu_memory_mib: 1024,

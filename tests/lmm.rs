@@ -6,6 +6,7 @@ mod common;
 
 use common::*;
 use glam::{DMat4, DQuat, DVec3, Vec3};
+use lmanim::lightmesh::kernel::Kernel;
 use lmanim::lightmesh::LightMeshStats;
 use lmanim::output::Image;
 use lmanim::scene::{LightKind, SceneDesc};
@@ -286,14 +287,19 @@ fn points_and_surfaces_on_lattice_nodes_and_planes_stay_finite() {
         Vec3::new(x0, y, z0),
     ];
     add_quads(&mut scene, &[blocker], 1, m);
-    for method in [Method::Lmm, Method::Lmm1] {
-        let settings = with_method(settings(40, 40), method, h, 2.0);
+    for (method, kernel) in [Method::Lmm, Method::Lmm1]
+        .into_iter()
+        .flat_map(|method| [Kernel::Box, Kernel::Smooth].map(|kernel| (method, kernel)))
+    {
+        let mut settings = with_method(settings(40, 40), method, h, 2.0);
+        settings.lightmesh.kernel = kernel;
         let image = render(scene.clone(), &settings);
         assert!(image
             .pixels
             .iter()
             .all(|p| p.is_finite() && p.min_element() >= 0.0));
-        // The GPU's half-ball rounds its on-plane tolerance as the CPU's.
+        // The GPU's half-ball rounds its on-plane tolerance, and its
+        // kernel the distances of nodes on lattice planes, as the CPU's.
         gpu::assert_gpu_frame_is(&scene, &settings, &image);
     }
 }
@@ -341,12 +347,15 @@ fn nodes_inside_closed_objects_see_no_light_and_do_not_break_shading() {
     let lmm_settings = with_method(settings(40, 40), Method::Lmm, 0.1, 2.5);
     let lmm = render(scene.clone(), &lmm_settings);
     gpu::assert_gpu_frame_is(&scene, &lmm_settings, &lmm);
-    let lmm1_settings = with_method(settings(40, 40), Method::Lmm1, 0.1, 2.5);
-    gpu::assert_gpu_frame_is(
-        &scene,
-        &lmm1_settings,
-        &render(scene.clone(), &lmm1_settings),
-    );
+    for kernel in [Kernel::Box, Kernel::Smooth] {
+        let mut lmm1_settings = with_method(settings(40, 40), Method::Lmm1, 0.1, 2.5);
+        lmm1_settings.lightmesh.kernel = kernel;
+        gpu::assert_gpu_frame_is(
+            &scene,
+            &lmm1_settings,
+            &render(scene.clone(), &lmm1_settings),
+        );
+    }
     // Far from the box both agree; the box top (lit, its candidate nodes
     // above it) equals Whitted too: nodes inside the box fail step 2.
     assert_eq!(pixel(&whitted, 2, 2), pixel(&lmm, 2, 2));
@@ -378,9 +387,14 @@ fn more_than_a_hundred_lights_use_several_mask_words() {
     let base = settings(32, 32);
     let whitted = render(scene.clone(), &base);
     // On the GPU: five words of 32 lights per node, and as many passes
-    // over each point's set.
-    for method in [Method::Lmm1, Method::Lmm] {
-        let settings = with_method(base.clone(), method, 0.05, 2.5);
+    // over each point's set, each summing weights into its counters.
+    for (method, kernel) in [
+        (Method::Lmm1, Kernel::Box),
+        (Method::Lmm, Kernel::Box),
+        (Method::Lmm1, Kernel::Smooth),
+    ] {
+        let mut settings = with_method(base.clone(), method, 0.05, 2.5);
+        settings.lightmesh.kernel = kernel;
         gpu::assert_gpu_frame_is(&scene, &settings, &render(scene.clone(), &settings));
     }
     let (lmm, stats) = lightmesh_stats(scene, &with_method(base, Method::Lmm, 0.05, 2.5));

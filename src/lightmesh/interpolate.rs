@@ -3,7 +3,8 @@
 //!   U_LM(P) = (1/m) Σ_k Σ_{i : N_{x_k}(i) = 1} Omega(i, P)
 //!           = Σ_i Omega(i, P) · (visible nodes of light i) / m,
 //!
-//! with Omega always evaluated at P. LMM keeps only the nodes that P sees
+//! with Omega always evaluated at P; the nodes may be weighed by their
+//! distance to P instead of counted (`super::kernel`). LMM keeps only the nodes that P sees
 //! (step 3, one short segment each); LMM1 skips that test and leaves out
 //! only the nodes inside closed geometry (`super::enclosure`). An empty
 //! set falls back to formula (1) with real shadow rays.
@@ -11,6 +12,7 @@
 use glam::IVec3;
 
 use super::enclosure::blocks_some;
+use super::kernel::Kernel;
 use super::masks::BrickCache;
 use super::{LightMesh, LightMeshStats};
 use crate::accel::offset::offset_ray_origin;
@@ -55,6 +57,8 @@ impl std::ops::AddAssign for PointCounts {
 /// and the brick lookups neighbouring points share.
 pub struct Scratch<'a> {
     nodes: Vec<IVec3>,
+    /// The kernel's weight of each node of the set.
+    weights: Vec<u32>,
     /// The visible-light words of each node of the set, node after node.
     visible: Vec<u64>,
     /// Per light word: lights visible from every node, from some node.
@@ -67,6 +71,7 @@ impl<'a> Scratch<'a> {
     pub fn new(mesh: &'a LightMesh) -> Scratch<'a> {
         Scratch {
             nodes: Vec::new(),
+            weights: Vec::new(),
             visible: Vec::new(),
             all: Vec::new(),
             any: Vec::new(),
@@ -117,6 +122,7 @@ impl LightMesh {
         let mut counts = PointCounts::default();
         let Scratch {
             nodes,
+            weights,
             visible,
             all,
             any,
@@ -145,9 +151,17 @@ impl LightMesh {
                         .is_some_and(|mask| blocks_some(&mask, reach)))
             });
         }
-        let m = nodes.len();
-        counts.interp_set = m as u64;
-        if m == 0 {
+        counts.interp_set = nodes.len() as u64;
+        let kernel = self.weights();
+        weights.clear();
+        weights.extend(nodes.iter().map(|&node| match kernel.kernel() {
+            Kernel::Box => 1,
+            Kernel::Smooth => kernel.weight(self.lattice.distance_squared(node, point.position)),
+        }));
+        // Σ w_k: with the box kernel, m; with the smooth one, zero only
+        // when every node lies on the rim.
+        let total: u32 = weights.iter().sum();
+        if total == 0 {
             counts.fallback = 1;
             counts.shadow_rays = whitted::direct_light_terms(point, lights, world, terms);
             return counts;
@@ -193,13 +207,12 @@ impl LightMesh {
                     if all[word] >> bit & 1 == 1 {
                         terms.add(light, omega.get(lane));
                     } else {
-                        let seen = visible
-                            .iter()
-                            .skip(word)
-                            .step_by(words)
-                            .filter(|&&seen| seen >> bit & 1 == 1)
-                            .count();
-                        terms.add(light, omega.get(lane) * (seen as f32 / m as f32));
+                        let seen: u32 = (visible.iter().skip(word).step_by(words))
+                            .zip(weights.iter())
+                            .filter(|&(&seen, _)| seen >> bit & 1 == 1)
+                            .map(|(_, &weight)| weight)
+                            .sum();
+                        terms.add(light, omega.get(lane) * (seen as f32 / total as f32));
                     }
                 }
             }

@@ -48,6 +48,14 @@ impl Lattice {
         self.origin + self.h * node.as_vec3()
     }
 
+    /// |node − p|², rounded as [`Lattice::half_ball`] rounds it: per-axis
+    /// offsets, then (x² + y²) + z².
+    pub fn distance_squared(&self, node: IVec3, p: Vec3) -> f32 {
+        let offset = |axis: usize| (self.origin[axis] + self.h * node[axis] as f32) - p[axis];
+        let (x, y, z) = (offset(0), offset(1), offset(2));
+        (x * x + y * y) + z * z
+    }
+
     /// Whether every node within `radius` of `p` has a representable
     /// coordinate.
     pub fn covers(&self, p: Vec3, radius: f32) -> bool {
@@ -190,7 +198,9 @@ mod tests {
                     for i in -reach..=reach {
                         let node = centre + IVec3::new(i, j, k);
                         let offset = lattice.node_position(node) - p;
-                        if offset.length_squared() <= radius * radius
+                        let inside = lattice.distance_squared(node, p) <= radius * radius;
+                        proptest::prop_assert_eq!(inside, offset.length_squared() <= radius * radius);
+                        if inside
                             && n.dot(offset) > lattice.on_plane_tolerance(p, radius)
                         {
                             brute.push(node);

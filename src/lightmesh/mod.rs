@@ -15,6 +15,7 @@ pub mod enclosure;
 pub mod fill;
 pub mod interpolate;
 pub mod invalidate;
+pub mod kernel;
 pub mod lattice;
 pub mod masks;
 pub mod persistent;
@@ -24,6 +25,7 @@ pub mod spacing;
 
 use serde::Serialize;
 
+use kernel::{Kernel, Weights};
 use lattice::Lattice;
 use masks::MaskStore;
 
@@ -33,6 +35,8 @@ pub struct LightMesh {
     pub lattice: Lattice,
     /// Interpolation radius in units of `h` (the paper's kI).
     pub ki: f32,
+    /// How formula (2) weighs the nodes of a set.
+    pub kernel: Kernel,
     masks: MaskStore,
     /// Bytes the masks may take before a frame is refused.
     memory_limit: usize,
@@ -122,6 +126,7 @@ impl LightMesh {
         LightMesh {
             lattice,
             ki,
+            kernel: Kernel::Box,
             masks: MaskStore::new(lights),
             memory_limit,
         }
@@ -130,6 +135,11 @@ impl LightMesh {
     /// Radius r = kI·h of the interpolation ball.
     pub fn radius(&self) -> f32 {
         self.ki * self.lattice.h
+    }
+
+    /// The kernel's weights at radius r.
+    pub fn weights(&self) -> Weights {
+        Weights::new(self.kernel, self.radius())
     }
 
     pub fn masks(&self) -> &MaskStore {

@@ -35,6 +35,7 @@ use rustc_hash::FxHashMap;
 use super::context::{GpuContext, GpuError};
 use super::scene::storage;
 use crate::backend::RenderError;
+use crate::lightmesh::kernel::Kernel;
 use crate::lightmesh::masks::{BrickEnclosure, MaskStore, BRICK_NODES, BRICK_WORDS};
 use crate::lightmesh::{LightMesh, LightMeshError};
 
@@ -55,6 +56,12 @@ pub struct MeshHeader {
     pub entry_mask: u32,
     /// 1 for LMM (point-to-node segments), 0 for LMM1.
     pub point_to_node_tests: u32,
+    /// The kernel's 1/r², as the CPU rounds it (`kernel::Weights`).
+    pub inverse_radius_squared: f32,
+    /// 0 for the box kernel, 1 for the smooth one.
+    pub smooth_kernel: u32,
+    /// WGSL rounds the struct up to its vec3's alignment of 16 bytes.
+    pub padding: [u32; 2],
 }
 
 /// A directory entry: a brick's coordinates and its slot, or
@@ -330,6 +337,7 @@ impl MaskPool {
         point_to_node_tests: bool,
     ) -> Result<(), GpuError> {
         let entries = (2 * self.resident.len()).next_power_of_two().max(16);
+        let weights = mesh.weights();
         let header = MeshHeader {
             origin: mesh.lattice.origin.to_array(),
             h: mesh.lattice.h,
@@ -337,6 +345,9 @@ impl MaskPool {
             light_words: self.light_words as u32,
             entry_mask: entries as u32 - 1,
             point_to_node_tests: point_to_node_tests as u32,
+            inverse_radius_squared: weights.inverse_radius_squared(),
+            smooth_kernel: (weights.kernel() == Kernel::Smooth) as u32,
+            padding: [0; 2],
         };
         if !self.directory_stale && self.directory.as_ref().is_some_and(|(h, _)| *h == header) {
             return Ok(());

@@ -8,11 +8,13 @@
 // through the directory.
 //
 // The half-ball's tests round as the CPU's rows of eight lanes do, and
-// the shares are integer counts divided once, so a point gets the CPU
-// backend's bits wherever its segments get the CPU's answers. Lights are
-// taken 32 at a time (one u32 of each mask group): the set is walked once
-// per 32 lights, counting for each light the kept nodes that see it in
-// bit-sliced counters, so no per-light array is needed.
+// the shares are integer sums of the kernel's integer weights
+// (`lightmesh/kernel.rs`: 1 per node for the box kernel) divided once,
+// so a point gets the CPU backend's bits wherever its segments get the
+// CPU's answers. Lights are taken 32 at a time (one u32 of each mask
+// group): the set is walked once per 32 lights, summing for each light
+// the weights of the kept nodes that see it in bit-sliced counters, so
+// no per-light array is needed.
 
 @group(0) @binding(1) var<storage, read> points: array<SurfacePoint>;
 @group(0) @binding(7) var<storage, read_write> direct: array<DirectLight>;
@@ -42,16 +44,29 @@ fn kept(node: vec3<i32>, mask: NodeMask, origin: vec3<f32>, reach_base: u32) -> 
 }
 
 // Bits of the per-light counters: a half-ball of at most `MAX_KI` steps
-// holds fewer than 2^13 nodes.
-const COUNTER_BITS: u32 = 13u;
+// holds fewer than 2^12 nodes, each weighing less than 2^12.
+const COUNTER_BITS: u32 = 24u;
+// Bits of a node's weight (`kernel::SMOOTH_WEIGHT_SCALE`).
+const WEIGHT_BITS: u32 = 12u;
+
+// `Weights::weight`: the kernel's weight of a node at squared distance
+// `distance_squared`, one rounded operation per step as the CPU does.
+fn node_weight(distance_squared: f32) -> u32 {
+    if directory.header.smooth_kernel == 0u {
+        return 1u;
+    }
+    let falloff = max(1.0 - mul(distance_squared, directory.header.inverse_radius_squared), 0.0);
+    return u32(floor(mul(mul(falloff, falloff), 4095.0)));
+}
 
 // One walk of the set for 32 lights: how many nodes it keeps, of how many
-// candidates, which lights all and any of them see, and per light how
-// many see it (bit-sliced: bit b of `counters[k]` is bit k of light b's
-// count).
+// candidates, their total weight, which lights all and any of them see,
+// and per light the weight of those that see it (bit-sliced: bit b of
+// `counters[k]` is bit k of light b's sum).
 struct Tally {
     candidates: u32,
     kept: u32,
+    total: u32,
     all: u32,
     any: u32,
     counters: array<u32, COUNTER_BITS>,
@@ -59,7 +74,7 @@ struct Tally {
 
 fn tally(ball: HalfBall, origin: vec3<f32>, reach_base: u32, word: u32) -> Tally {
     let wanted = reach[reach_base + word];
-    var t = Tally(0u, 0u, wanted, 0u, array<u32, COUNTER_BITS>());
+    var t = Tally(0u, 0u, 0u, wanted, 0u, array<u32, COUNTER_BITS>());
     var nodes = walk(ball);
     while next_node(&nodes) {
         t.candidates += 1u;
@@ -69,15 +84,23 @@ fn tally(ball: HalfBall, origin: vec3<f32>, reach_base: u32, word: u32) -> Tally
             continue;
         }
         t.kept += 1u;
+        let weight = node_weight(nodes.distance_squared);
+        t.total += weight;
         let seen = visible(mask, word) & wanted;
         t.all &= seen;
         t.any |= seen;
-        // Add `seen` to the counters, carrying bit by bit.
-        var carry = seen;
-        for (var bit = 0u; bit < COUNTER_BITS && carry != 0u; bit++) {
-            let next = t.counters[bit] & carry;
-            t.counters[bit] ^= carry;
-            carry = next;
+        // Add `weight` to the counters of the lights in `seen`: each set
+        // bit of it adds `seen` at that bit's place, carrying upwards.
+        for (var place = 0u; place < WEIGHT_BITS; place++) {
+            if (weight >> place & 1u) == 0u {
+                continue;
+            }
+            var carry = seen;
+            for (var bit = place; bit < COUNTER_BITS && carry != 0u; bit++) {
+                let next = t.counters[bit] & carry;
+                t.counters[bit] ^= carry;
+                carry = next;
+            }
         }
     }
     return t;
@@ -116,16 +139,16 @@ fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
     let light_words = directory.header.light_words;
     let reach_base = index * light_words;
     var radiance = vec3<f32>(0.0);
-    var m = 0u;
+    var total = 0u;
     for (var word = 0u; word < light_words; word++) {
         let t = tally(ball, origin, reach_base, word);
         if word == 0u {
-            m = t.kept;
+            total = t.total;
             add_count(0u, t.candidates);
-            add_count(1u, m);
+            add_count(1u, t.kept);
             let tests = t.candidates * directory.header.point_to_node_tests;
             add_count(2u, tests);
-            if m == 0u {
+            if total == 0u {
                 add_count(3u, 1u);
                 let fallback = formula_one(point);
                 direct[index] = DirectLight(fallback.radiance, fallback.shadow_rays + tests);
@@ -144,7 +167,7 @@ fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
             if (t.all >> bit & 1u) == 1u {
                 radiance += value;
             } else {
-                radiance += scale3(value, div(f32(count_of(t, bit)), f32(m)));
+                radiance += scale3(value, div(f32(count_of(t, bit)), f32(total)));
             }
         }
     }

@@ -12,6 +12,9 @@ struct MeshHeader {
     light_words: u32,
     entry_mask: u32,
     point_to_node_tests: u32,
+    // The kernel's 1/r² (`kernel::Weights`), and 1 for the smooth kernel.
+    inverse_radius_squared: f32,
+    smooth_kernel: u32,
 }
 
 struct Directory {
@@ -168,12 +171,13 @@ struct BallWalk {
     dy2: f32,
     dz2: f32,
     n_yz: vec2<f32>,
-    // The node `next_node` found.
+    // The node `next_node` found, and its squared distance to the point.
     node: vec3<i32>,
+    distance_squared: f32,
 }
 
 fn walk(ball: HalfBall) -> BallWalk {
-    return BallWalk(ball, vec3<i32>(ball.span.x, -1, 0), 0.0, 0.0, vec2<f32>(0.0), vec3<i32>(0));
+    return BallWalk(ball, vec3<i32>(ball.span.x, -1, 0), 0.0, 0.0, vec2<f32>(0.0), vec3<i32>(0), 0.0);
 }
 
 // Moves `w` to the next node of the half-ball; false when none is left.
@@ -203,9 +207,11 @@ fn next_node(w: ptr<function, BallWalk>) -> bool {
         let i = (*w).at.x;
         (*w).at.x += 1;
         let dx = node_offset(origin.x, ball.low.x + i, ball.p.x);
-        if (mul(dx, dx) + (*w).dy2) + (*w).dz2 <= ball.radius_squared
+        let distance_squared = (mul(dx, dx) + (*w).dy2) + (*w).dz2;
+        if distance_squared <= ball.radius_squared
             && (mul(ball.n.x, dx) + (*w).n_yz.x) + (*w).n_yz.y > ball.on_plane {
             (*w).node = ball.low + vec3<i32>(i, (*w).at.y, (*w).at.z);
+            (*w).distance_squared = distance_squared;
             return true;
         }
     }
