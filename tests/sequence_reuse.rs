@@ -13,6 +13,7 @@ use common::*;
 use glam::{DMat4, DVec3, Vec3};
 
 use lmanim::backend::Backend;
+use lmanim::lightmesh::kernel::Kernel;
 use lmanim::output::Image;
 use lmanim::scene::animation::{AnimationClip, Channel, Interpolation, Sampler};
 use lmanim::scene::pose::dynamic_nodes;
@@ -149,19 +150,33 @@ fn cpu() -> Backend {
     Backend::new(BackendKind::Cpu, Some(2)).unwrap()
 }
 
-/// For LMM1 and LMM: every time rendered by one sequence on `backend`,
-/// checked equal to the same time rendered cold, bit for bit.
+/// The light-mesh runs reuse is checked for: both methods with the
+/// paper's kernel, and LMM1 with the smooth one.
+const VARIANTS: [(Method, Kernel); 3] = [
+    (Method::Lmm1, Kernel::Box),
+    (Method::Lmm, Kernel::Box),
+    (Method::Lmm1, Kernel::Smooth),
+];
+
+fn settings_for_variant((method, kernel): (Method, Kernel)) -> Settings {
+    let mut settings = settings_for(method);
+    settings.lightmesh.kernel = kernel;
+    settings
+}
+
+/// For each of [`VARIANTS`]: every time rendered by one sequence on
+/// `backend`, checked equal to the same time rendered cold, bit for bit.
 fn sequences_equal_cold(scene: &SceneDesc, backend: &mut Backend) -> Vec<Vec<(Image, FrameStats)>> {
-    [Method::Lmm1, Method::Lmm]
+    VARIANTS
         .into_iter()
-        .map(|method| {
-            let settings = settings_for(method);
+        .map(|variant| {
+            let settings = settings_for_variant(variant);
             let frames = rendered_in_sequence(scene, &settings, backend);
             for (&time, (image, _)) in TIMES.iter().zip(&frames) {
                 assert_eq!(
                     *image,
                     rendered_cold(scene, &settings, time, backend),
-                    "{method} at t = {time}"
+                    "{variant:?} at t = {time}"
                 );
             }
             frames
@@ -404,7 +419,7 @@ fn a_mesh_deforming_in_part_renders_every_frame_like_cold() {
 
 /// The GPU backend keeps the masks resident across frames and uploads
 /// only the bricks edited since: with a truck whose shadow crosses the far
-/// facade, a moving lamp and a bending sheet, for LMM1 and LMM, its frames
+/// facade, a moving lamp and a bending sheet, for each of [`VARIANTS`], its frames
 /// equal its own frames rendered cold, and (where it rounds as the CPU
 /// does) the CPU backend's, bit for bit.
 #[test]
@@ -416,21 +431,24 @@ fn gpu_frames_with_resident_masks_equal_cold_frames_and_the_cpus() {
     let mut gpu = Backend::Gpu(Box::new(gpu));
     let scene = with_bending_sheet(street(true, true, false));
     let on_gpu = sequences_equal_cold(&scene, &mut gpu);
-    for (method, gpu_frames) in [Method::Lmm1, Method::Lmm].into_iter().zip(on_gpu) {
-        let cpu_frames = rendered_in_sequence(&scene, &settings_for(method), &mut cpu());
+    for (variant, gpu_frames) in VARIANTS.into_iter().zip(on_gpu) {
+        let cpu_frames = rendered_in_sequence(&scene, &settings_for_variant(variant), &mut cpu());
         for (&time, ((gpu, gpu_stats), (cpu, _))) in
             TIMES.iter().zip(gpu_frames.iter().zip(&cpu_frames))
         {
             if time > 0.0 {
                 let mesh = gpu_stats.lightmesh.expect("light-mesh stats");
-                assert!(mesh.bits_reused > 0, "{method} reuses bits at t = {time}");
+                assert!(
+                    mesh.bits_reused > 0,
+                    "{variant:?} reuses bits at t = {time}"
+                );
                 assert!(
                     gpu_stats.bits_invalidated > 0,
-                    "{method} drops bits at t = {time}"
+                    "{variant:?} drops bits at t = {time}"
                 );
             }
             if exact {
-                assert_eq!(gpu, cpu, "{method} at t = {time}");
+                assert_eq!(gpu, cpu, "{variant:?} at t = {time}");
             }
         }
     }
