@@ -50,8 +50,13 @@ pub struct GpuContext {
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
     pub limits: wgpu::Limits,
-    /// Whether the adapter has f64 in shaders: then products and quotients
-    /// round as on the CPU (see `shaders/exact_f64.wgsl`).
+    /// Whether the adapter has f64 in shaders: then products, quotients
+    /// and roots round as on the CPU (see `shaders/exact_f64.wgsl`).
+    pub f64: bool,
+    /// Whether the passes go to the driver as our own SPIR-V, every float
+    /// operation marked `NoContraction` (Vulkan; see `super::spirv`).
+    pub own_spirv: bool,
+    /// Both: then every answer is the CPU's to the bit.
     pub exact: bool,
 }
 
@@ -76,12 +81,14 @@ impl GpuContext {
                 limit: available.max_storage_buffers_per_shader_stage,
             });
         }
-        let exact = adapter.features().contains(wgpu::Features::SHADER_F64);
-        let features = if exact {
-            wgpu::Features::SHADER_F64
-        } else {
-            wgpu::Features::empty()
-        };
+        let f64 = adapter.features().contains(wgpu::Features::SHADER_F64);
+        let own_spirv = info.backend == wgpu::Backend::Vulkan
+            && adapter
+                .features()
+                .contains(wgpu::Features::PASSTHROUGH_SHADERS);
+        let mut features = wgpu::Features::empty();
+        features.set(wgpu::Features::SHADER_F64, f64);
+        features.set(wgpu::Features::PASSTHROUGH_SHADERS, own_spirv);
         let limits = wgpu::Limits {
             max_storage_buffers_per_shader_stage: STORAGE_BUFFERS,
             max_storage_buffer_binding_size: available.max_storage_buffer_binding_size,
@@ -106,7 +113,9 @@ impl GpuContext {
             queue,
             info,
             limits,
-            exact,
+            f64,
+            own_spirv,
+            exact: f64 && own_spirv,
         })
     }
 
@@ -165,8 +174,13 @@ impl fmt::Display for GpuContext {
         if self.is_software() {
             write!(f, ", software")?;
         }
-        if !self.exact {
+        if !self.f64 {
             write!(f, ", no f64: shared-edge ties may differ from the CPU")?;
+        } else if !self.own_spirv {
+            write!(
+                f,
+                ", WGSL to the driver: fused products may differ from the CPU"
+            )?;
         }
         write!(f, ")")
     }

@@ -30,6 +30,7 @@ mod pass;
 mod scatter;
 pub(crate) mod scene;
 mod shaders;
+mod spirv;
 pub(crate) mod surface;
 pub(crate) mod trace;
 

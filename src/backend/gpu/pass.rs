@@ -12,6 +12,7 @@ use wgpu::util::DeviceExt;
 use super::context::{GpuContext, GpuError};
 use super::scene::GpuScene;
 use super::shaders::{self, Arithmetic, Entry};
+use super::spirv;
 
 /// Invocations per workgroup, as the shaders declare.
 pub const WORKGROUP: u32 = 64;
@@ -22,6 +23,47 @@ pub const BATCH: usize = 1 << 20;
 /// The binding of a pass's items; its answers go to [`ANSWERS`].
 pub const ITEMS: u32 = 1;
 const ANSWERS: u32 = 7;
+
+/// The pass's shader: our own SPIR-V where the context takes it (every
+/// float operation kept from fusing), else WGSL for wgpu to translate.
+fn shader_module(
+    context: &GpuContext,
+    entry: Entry,
+    layout: &[wgpu::BindGroupLayoutEntry],
+) -> wgpu::ShaderModule {
+    let (arithmetic, capabilities) = if context.f64 {
+        (Arithmetic::ExactF64, naga::valid::Capabilities::FLOAT64)
+    } else {
+        (Arithmetic::PlainF32, naga::valid::Capabilities::empty())
+    };
+    let source = shaders::source(entry, arithmetic);
+    if !context.own_spirv {
+        return context
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(entry.name()),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+    }
+    let bindings: Vec<u32> = layout.iter().map(|binding| binding.binding).collect();
+    let words = spirv::compile(&source, entry.name(), capabilities, &bindings)
+        .unwrap_or_else(|error| panic!("the {} pass does not compile: {error}", entry.name()));
+    let descriptor = wgpu::ShaderModuleDescriptorPassthrough {
+        label: Some(entry.name()),
+        entry_points: vec![wgpu::PassthroughShaderEntryPoint {
+            name: entry.name().into(),
+            workgroup_size: (WORKGROUP, 1, 1),
+        }]
+        .into(),
+        spirv: Some(words.into()),
+        ..Default::default()
+    };
+    // SAFETY: the words are naga's translation of a module naga has just
+    // validated, with decorations added that change no interface; the
+    // bind group layout is the one the WGSL declares (the layout test in
+    // `shaders.rs` holds the two together).
+    unsafe { context.device.create_shader_module_passthrough(descriptor) }
+}
 
 /// A buffer bound at a binding number.
 pub type Bound<'a> = (u32, &'a wgpu::Buffer);
@@ -114,15 +156,7 @@ impl WorldPass {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let arithmetic = if context.exact {
-            Arithmetic::ExactF64
-        } else {
-            Arithmetic::PlainF32
-        };
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(entry.name()),
-            source: wgpu::ShaderSource::Wgsl(shaders::source(entry, arithmetic).into()),
-        });
+        let module = shader_module(context, entry, &entries);
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(entry.name()),
             layout: Some(&pipeline_layout),
