@@ -15,7 +15,9 @@ use crate::backend::{Backend, BackendError, CpuBackend, RenderError};
 use crate::import::{self, ImportError};
 use crate::lightmesh::persistent::PersistentLightMesh;
 use crate::lightmesh::{LightMesh, LightMeshError};
-use crate::output::{self, FramePattern, OutputError, RenderedFrame, ShotSheet};
+use crate::output::{
+    self, BackgroundWriter, FrameFiles, FramePattern, OutputError, RenderedFrame, ShotSheet,
+};
 use crate::render::frame::{CameraChoice, FrameScene, PlaceError, SceneBounds};
 use crate::render::FrameJob;
 use crate::scene::pose::Pose;
@@ -441,8 +443,16 @@ pub fn warm(job: &Job) -> Result<WarmStats, RunError> {
     Ok(warm)
 }
 
-/// Renders every frame of `job`, writing each as it is done, and reports
-/// each to `on_frame`.
+/// A rendered frame whose files the writer has: what reporting it takes.
+struct FrameInWriting {
+    index: usize,
+    stats: FrameStats,
+    path: PathBuf,
+    automatic_camera: bool,
+}
+
+/// Renders every frame of `job`, writing each while the next renders, and
+/// reports each to `on_frame` once its files are written.
 pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, RunError> {
     let started = Instant::now();
     let settings = job.settings;
@@ -463,6 +473,25 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
         Some(path) => Some(shot_sheet(Path::new(path), settings, job.frames)?),
         None => None,
     };
+    // Each frame's files are written while the next frame renders; a
+    // frame is reported once its files are on disk.
+    let mut writer = BackgroundWriter::new();
+    let mut in_writing: Option<FrameInWriting> = None;
+    let mut report = |done: FrameInWriting, writer: &mut BackgroundWriter| {
+        let mut stats = done.stats;
+        let write_seconds = writer.wait()?.unwrap_or_default();
+        stats.add_stage_time("output", write_seconds);
+        stats.seconds += write_seconds;
+        on_frame(FrameDone {
+            index: done.index,
+            stats: &stats,
+            path: &done.path,
+            automatic_camera: done.automatic_camera,
+            adapter: run.adapter.as_deref(),
+        });
+        run.frames.push(stats);
+        Ok::<(), RunError>(())
+    };
     for (index, &frame) in job.frames.frames().iter().enumerate() {
         let frame_started = Instant::now();
         let mut stats = FrameStats {
@@ -471,30 +500,30 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
         };
         let placed = sequence.advance(timeline.time_of(frame), settings, &mut stats)?;
         let rendered = sequence.render_frame(&mut backend, &placed, settings, &mut stats)?;
-        let image = &rendered.image;
-
-        let write_started = Instant::now();
-        let path = job.pattern.path_for(frame);
-        if settings.exr {
-            output::write_layered_exr(&path, image, &rendered.aovs, settings.exr_precision)?;
-        }
-        if settings.png {
-            let path = job.pattern.png_path_for(frame);
-            output::write_png_preview(&path, image, settings.exposure)?;
-        }
         if let Some(sheet) = &mut sheet {
-            sheet.add_rendered(frame, image);
+            sheet.add_rendered(frame, &rendered.image);
         }
-        stats.add_stage_time("output", write_started.elapsed().as_secs_f64());
         stats.seconds = frame_started.elapsed().as_secs_f64();
-        on_frame(FrameDone {
-            index,
-            stats: &stats,
-            path: &path,
-            automatic_camera: placed.automatic_camera,
-            adapter: run.adapter.as_deref(),
+        if let Some(done) = in_writing.take() {
+            report(done, &mut writer)?;
+        }
+        let path = job.pattern.path_for(frame);
+        writer.write(FrameFiles {
+            rendered,
+            exr: settings.exr.then(|| (path.clone(), settings.exr_precision)),
+            png: settings
+                .png
+                .then(|| (job.pattern.png_path_for(frame), settings.exposure)),
         });
-        run.frames.push(stats);
+        in_writing = Some(FrameInWriting {
+            index,
+            stats,
+            path,
+            automatic_camera: placed.automatic_camera,
+        });
+    }
+    if let Some(done) = in_writing.take() {
+        report(done, &mut writer)?;
     }
     // Saved once, after the last frame: static bits only grow during a run
     // except where a light moves, and what a light leaves at its starting

@@ -1,10 +1,12 @@
 //! The end of a frame's data flow: rendered [`Image`]s become files. EXR
 //! frames hold linear radiance (half floats by default), PNG previews are
 //! tone-mapped and sRGB-encoded, frame names come from a `#` pattern, and
-//! storyboards get a contact sheet. Every file is written atomically, so a
+//! storyboards get a contact sheet. Frames are written on a thread of
+//! their own while the next renders. Every file is written atomically, so a
 //! crashed or killed render never leaves a half-written frame behind.
 
 mod atomic;
+mod background;
 mod contact_sheet;
 mod error;
 mod exr;
@@ -14,6 +16,7 @@ mod png;
 mod shot_sheet;
 
 pub use atomic::write_atomically;
+pub use background::{BackgroundWriter, FrameFiles};
 pub use contact_sheet::ContactSheet;
 pub use error::OutputError;
 pub use exr::{read_exr, write_exr, write_layered_exr};
