@@ -1,12 +1,13 @@
 // Arithmetic that rounds as the CPU's does, for adapters with f64.
 //
-// WGSL lets a compiler fuse `a * b + c` into one FMA (SPIR-V from naga
-// carries no NoContraction), and lets division be off by 2.5 ULP. The
-// product of two f32s is exact in f64 and rounds to the f32 product on
-// the way back; the subtraction that follows then has f32 operands that
-// are no product, so nothing is left to fuse. Division rounds once in
-// f64, then to f32: the CPU's correctly rounded quotient except where the
-// f64 quotient lands within 2.5 f64 ULPs of an f32 tie.
+// WGSL lets a compiler fuse `a * b + c` into one FMA and lets division be
+// off by 2.5 ULP. The product of two f32s is exact in f64 and rounds to
+// the f32 product on the way back. That alone does not stop fusing: a
+// compiler may see that the round trip is an f32 product (NVIDIA's does)
+// and fuse that; on Vulkan the SPIR-V marks every float operation
+// NoContraction (`spirv.rs`), which does. Division rounds once in f64,
+// then to f32: the CPU's correctly rounded quotient except where the f64
+// quotient lands within 2.5 f64 ULPs of an f32 tie.
 
 fn mul(a: f32, b: f32) -> f32 {
     return f32(f64(a) * f64(b));
