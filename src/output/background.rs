@@ -24,16 +24,24 @@ pub struct FrameFiles {
 }
 
 impl FrameFiles {
-    /// Writes the files, atomically each, and says how long it took.
+    /// Writes the files, atomically each and both at once, and says how
+    /// long it took; the EXR's failure is reported before the PNG's.
     fn write(&self) -> Result<f64, OutputError> {
         let started = Instant::now();
         let image = &self.rendered.image;
-        if let Some((path, precision)) = &self.exr {
-            write_layered_exr(path, image, &self.rendered.aovs, *precision)?;
-        }
-        if let Some((path, exposure)) = &self.png {
-            write_png_preview(path, image, *exposure)?;
-        }
+        let (exr, png) = rayon::join(
+            || match &self.exr {
+                Some((path, precision)) => {
+                    write_layered_exr(path, image, &self.rendered.aovs, *precision)
+                }
+                None => Ok(()),
+            },
+            || match &self.png {
+                Some((path, exposure)) => write_png_preview(path, image, *exposure),
+                None => Ok(()),
+            },
+        );
+        exr.and(png)?;
         Ok(started.elapsed().as_secs_f64())
     }
 }
