@@ -21,16 +21,6 @@ struct DirectLight {
 // Shading points, then shadow segments.
 @group(0) @binding(18) var<storage, read_write> counters: array<atomic<u32>, 2>;
 
-// `Environment::unlit`: emission, plus the sky times the diffuse albedo
-// (`environment::diffuse_albedo`) where there is a sky.
-fn unlit(point: SurfacePoint) -> vec3<f32> {
-    if environment.sky == 0u {
-        return point.emissive;
-    }
-    let albedo = scale3(point.base_color, mul(1.0 - point.transmission, 1.0 - point.metallic));
-    return point.emissive + mul3(environment.ambient, albedo);
-}
-
 @compute @workgroup_size(64)
 fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
