@@ -390,7 +390,9 @@ fn the_gpu_backend_writes_aovs_from_the_command_line() {
         "--quiet",
     ]);
     let stderr = String::from_utf8_lossy(&run.stderr);
-    if !run.status.success() && std::env::var_os("CI").is_none() && stderr.contains("no GPU adapter")
+    if !run.status.success()
+        && std::env::var_os("CI").is_none()
+        && stderr.contains("no GPU adapter")
     {
         eprintln!("skipped: {stderr}");
         return;

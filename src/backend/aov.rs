@@ -169,8 +169,12 @@ impl AovFrame {
                         });
                     }
                 }
-                Aov::Albedo => mine.for_each(|out| band.resolve_mean(job, out, |_, hit| hit.albedo)),
-                Aov::Normal => mine.for_each(|out| band.resolve_mean(job, out, |_, hit| hit.normal)),
+                Aov::Albedo => {
+                    mine.for_each(|out| band.resolve_mean(job, out, |_, hit| hit.albedo))
+                }
+                Aov::Normal => {
+                    mine.for_each(|out| band.resolve_mean(job, out, |_, hit| hit.normal))
+                }
                 Aov::Depth => mine.for_each(|out| band.resolve_depth(job, out)),
             }
         }

@@ -168,7 +168,9 @@ impl AovFilm {
                 let encoder = context.device.create_command_encoder(&Default::default());
                 let count = self.samples * (self.layers + 1);
                 let sums: Vec<[f32; 4]> = read_back(context, encoder, buffer, count)?;
-                sums.iter().map(|&[r, g, b, _]| Vec3::new(r, g, b)).collect()
+                sums.iter()
+                    .map(|&[r, g, b, _]| Vec3::new(r, g, b))
+                    .collect()
             }
             None => Vec::new(),
         };

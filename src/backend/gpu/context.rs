@@ -88,8 +88,8 @@ impl GpuContext {
         } else {
             wgpu::Features::empty()
         };
-        let storage_buffers = (available.max_storage_buffers_per_shader_stage)
-            .min(LAYERED_STORAGE_BUFFERS);
+        let storage_buffers =
+            (available.max_storage_buffers_per_shader_stage).min(LAYERED_STORAGE_BUFFERS);
         let limits = wgpu::Limits {
             max_storage_buffers_per_shader_stage: storage_buffers,
             max_storage_buffer_binding_size: available.max_storage_buffer_binding_size,

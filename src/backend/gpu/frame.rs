@@ -99,7 +99,13 @@ impl Frame<'_> {
                     self.shade(encoder, &camera_rays, films, method, band_start, stats)?;
                 if let Some(aov_film) = &aov_film {
                     let passes = self.pipelines.aovs(context);
-                    aov_film.record_first_hits(passes, context, &mut encoder, self.scene, &camera_rays);
+                    aov_film.record_first_hits(
+                        passes,
+                        context,
+                        &mut encoder,
+                        self.scene,
+                        &camera_rays,
+                    );
                 }
                 level.extend(self.continue_paths(encoder, &camera_rays, 0)?);
             }
@@ -274,7 +280,7 @@ impl Frame<'_> {
         records: &[SurfacePoint],
         band_start: u64,
         layer_of: Option<(&[usize], usize)>,
-    ) -> Result<(Vec<DirectLight>, Option<Vec<[f32; 4]>>), GpuError> {
+    ) -> Result<(Vec<DirectLight>, Option<LayerSums>), GpuError> {
         let job = self.job;
         let mut direct = Vec::with_capacity(records.len());
         let mut layers = layer_of.map(|(_, count)| Vec::with_capacity(records.len() * count));
@@ -322,6 +328,10 @@ impl Frame<'_> {
         Ok((direct, layers))
     }
 }
+
+/// Per point, its visible terms summed per light layer, as
+/// [`PointLayers`] holds them (the fourth component unused).
+type LayerSums = Vec<[f32; 4]>;
 
 /// One point's lamp samples in light order, visibility aside.
 #[derive(Default)]

@@ -96,7 +96,13 @@ impl LayeredPass {
         };
         let pass = self.layered.get_or_init(|| {
             let writes: Vec<u32> = self.writes.iter().copied().chain([POINT_LAYERS]).collect();
-            WorldPass::new(context, self.layered_entry, self.world, &self.reads, &writes)
+            WorldPass::new(
+                context,
+                self.layered_entry,
+                self.world,
+                &self.reads,
+                &writes,
+            )
         });
         let reads: Vec<Bound> = (reads.iter().copied())
             .chain([(POINT_LAYERS, &layers.buffer)])
