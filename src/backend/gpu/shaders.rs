@@ -94,6 +94,7 @@ const SURFACE_POINT: &str = include_str!("shaders/surface_point.wgsl");
 const SCHLICK: &str = include_str!("shaders/schlick.wgsl");
 const ENVIRONMENT: &str = include_str!("shaders/environment.wgsl");
 const UNLIT: &str = include_str!("shaders/unlit.wgsl");
+const SAMPLE_RUNS: &str = include_str!("shaders/sample_runs.wgsl");
 /// Where formula (1) and (2) put each light's term besides their sum:
 /// nowhere, or the point's light layers (`--aovs light`).
 const LIGHT_SUM: &str = include_str!("shaders/light_sum.wgsl");
@@ -202,6 +203,7 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
                 SURFACE_POINT,
                 ENVIRONMENT,
                 UNLIT,
+                SAMPLE_RUNS,
                 include_str!("shaders/accumulate.wgsl"),
             ],
         ),
@@ -222,6 +224,7 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
                 SURFACE_POINT,
                 ENVIRONMENT,
                 UNLIT,
+                SAMPLE_RUNS,
                 include_str!("shaders/accumulate_layers.wgsl"),
             ],
         ),

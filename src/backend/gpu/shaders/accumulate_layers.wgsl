@@ -2,9 +2,9 @@
 // level's shading points send to each light layer of their samples, each
 // point's per-layer sums (`light_layers.wgsl`) times its path throughput,
 // and to `other` (the last layer of a sample) what no light brought.
-// Added in point order as `accumulate.wgsl` adds the beauty: the first
-// invocation of each sample's run of points adds the whole run, so no two
-// invocations touch one sample and the sums are the CPU's, bit for bit.
+// Added in point order, a sample's run of points at a time, as
+// `accumulate.wgsl` adds the beauty (`sample_runs.wgsl`): the sums are the
+// CPU's, bit for bit.
 
 @group(0) @binding(1) var<storage, read> points: array<SurfacePoint>;
 // Per sample of the band, `params.layer_count` light layers, then `other`.
@@ -15,13 +15,10 @@
 @compute @workgroup_size(64)
 fn accumulate_layers(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
-    if index >= params.item_count {
+    if !starts_run(index) {
         return;
     }
     let sample = points[index].sample;
-    if index > 0u && points[index - 1u].sample == sample {
-        return;
-    }
     let layers = params.layer_count;
     let row = sample * (layers + 1u);
     for (var i = index; i < params.item_count && points[i].sample == sample; i++) {
