@@ -440,11 +440,6 @@ impl Settings {
         {
             return Err(format!("aovs lists {} twice", aov.name()));
         }
-        if self.backend == BackendKind::Gpu && !self.aovs.is_empty() {
-            return Err(
-                "aovs are written by backend cpu only: backend gpu writes the beauty".into(),
-            );
-        }
         if self.threads == Some(0) {
             return Err("threads is 0; leave it out to use every core".into());
         }

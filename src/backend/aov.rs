@@ -1,9 +1,14 @@
 //! A frame's AOV layers (`--aovs`), made band by band beside the beauty
-//! from the same shading points: the `light` layers from each point's
-//! light terms as the shade stage logged them (`render/light_terms.rs`),
-//! weighted by the point's path throughput and resolved like the beauty,
-//! so that they sum to it within rounding; `albedo`, `normal` and `depth`
-//! from the camera's own hits. The beauty's stages run unchanged: only
+//! from the same shading points. Both backends fill one [`BandSamples`]
+//! per band — each sample's camera hit (`albedo`, `normal`, `depth`) and,
+//! for the `light` AOV, what its points sent per light layer — and
+//! [`AovFrame::add_band`] resolves it into pixels, so the two backends'
+//! layers can differ only where their samples do. A point's light terms
+//! (as the shade stage logged them, `render/light_terms.rs`) are summed
+//! per layer in light order, then weighted by the point's path
+//! throughput, as the GPU's formula (1) and (2) passes sum them where the
+//! point lies (`gpu/shaders/light_layers.wgsl`); so the layers sum to
+//! the beauty within rounding. The beauty's stages run unchanged: only
 //! the shade stage keeps its terms where the `light` AOV asks for them.
 
 use glam::{UVec2, Vec3};
@@ -135,47 +140,29 @@ impl AovFrame {
         job.aovs.contains(&Aov::Light)
     }
 
-    /// Adds the pixels of the band `rows`: its shading `points` (the first
-    /// `primary` of them camera hits) with the shade stage's `terms`, one
-    /// per `chunk` points.
-    pub fn add_band<T: PointTerms>(
-        &mut self,
-        job: &FrameJob,
-        rows: std::ops::Range<u32>,
-        points: &[ShadingPoint],
-        primary: usize,
-        terms: &[T],
-        chunk: usize,
-    ) {
-        let camera_hits = &points[..primary];
-        let samples = ((rows.end - rows.start) * job.width * job.spp) as usize;
-        let mut covered = vec![false; samples];
-        for point in camera_hits {
-            covered[point.sample as usize] = true;
-        }
-        let band = Band {
-            job,
-            rows,
-            camera_hits,
-            covered,
-        };
+    /// The light layers the bands' samples must be split into, where the
+    /// `light` AOV is asked for.
+    pub fn light_layers(&self) -> Option<&LightLayers> {
+        self.aovs.contains(&Aov::Light).then_some(&self.lights)
+    }
+
+    /// Adds the pixels of the band whose samples `band` holds.
+    pub fn add_band(&mut self, job: &FrameJob, band: &BandSamples) {
         let mut layers = self.layers.iter_mut();
         for aov in &self.aovs {
             let count = match aov {
                 Aov::Light => self.lights.names.len() + 1,
                 _ => 1,
             };
-            let mine: Vec<&mut AovLayer> = layers.by_ref().take(count).collect();
+            let mine = layers.by_ref().take(count);
             match aov {
                 Aov::Light => {
-                    let lights = (&self.lights.layer_of[..], count);
-                    let sent = band.light_samples(points, terms, chunk, lights);
-                    for (layer, out) in mine.into_iter().enumerate() {
+                    for (layer, out) in mine.enumerate() {
                         let other = layer == count - 1;
-                        band.resolve_mean(out, |sample, covered| {
-                            let value = sent[sample * count + layer];
+                        band.resolve_mean(job, out, |sample, hit| {
+                            let value = band.light[sample * count + layer];
                             if other {
-                                job.environment.sample_radiance(value, covered)
+                                job.environment.sample_radiance(value, hit.covered)
                             } else {
                                 value
                             }
@@ -183,18 +170,12 @@ impl AovFrame {
                     }
                 }
                 Aov::Albedo => {
-                    let albedo = band.camera_samples(|point| point.material.base_color);
-                    for out in mine {
-                        band.resolve_mean(out, |s, _| albedo[s]);
-                    }
+                    mine.for_each(|out| band.resolve_mean(job, out, |_, hit| hit.albedo))
                 }
                 Aov::Normal => {
-                    let normal = band.camera_samples(|point| point.shading_normal);
-                    for out in mine {
-                        band.resolve_mean(out, |s, _| normal[s]);
-                    }
+                    mine.for_each(|out| band.resolve_mean(job, out, |_, hit| hit.normal))
                 }
-                Aov::Depth => mine.into_iter().for_each(|out| band.resolve_depth(out)),
+                Aov::Depth => mine.for_each(|out| band.resolve_depth(job, out)),
             }
         }
     }
@@ -205,80 +186,129 @@ impl AovFrame {
     }
 }
 
-/// One band's view of the frame.
-struct Band<'a> {
-    job: &'a FrameJob<'a>,
-    rows: std::ops::Range<u32>,
-    camera_hits: &'a [ShadingPoint],
-    /// Whether each sample's camera ray hit something.
-    covered: Vec<bool>,
+/// What a camera ray met, for `albedo`, `normal` and `depth`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FirstHit {
+    /// Whether it hit anything (the rest is [`FirstHit::MISS`]'s if not).
+    pub covered: bool,
+    /// The base colour where it hit.
+    pub albedo: Vec3,
+    /// The world shading normal there.
+    pub normal: Vec3,
+    /// Metres from the ray's origin.
+    pub depth: f32,
 }
 
-impl Band<'_> {
-    fn samples(&self) -> usize {
-        self.covered.len()
-    }
+impl FirstHit {
+    /// A camera ray that met nothing: black, no normal, infinitely far.
+    pub const MISS: FirstHit = FirstHit {
+        covered: false,
+        albedo: Vec3::ZERO,
+        normal: Vec3::ZERO,
+        depth: f32::INFINITY,
+    };
+}
 
-    /// Per sample, `value` of its camera hit (zero where it has none).
-    fn camera_samples(&self, value: impl Fn(&ShadingPoint) -> Vec3) -> Vec<Vec3> {
-        let mut values = vec![Vec3::ZERO; self.samples()];
-        for point in self.camera_hits {
-            values[point.sample as usize] = value(point);
-        }
-        values
-    }
+/// One band's samples as the AOV layers need them: what both backends
+/// fill and [`AovFrame::add_band`] resolves.
+pub struct BandSamples {
+    /// Per sample, its camera hit.
+    pub first_hits: Vec<FirstHit>,
+    /// Per sample and light layer (`other` last), what its points sent:
+    /// each point's terms summed per layer in light order, times its path
+    /// throughput, and in `other` what no light brought; empty without
+    /// the `light` AOV.
+    pub light: Vec<Vec3>,
+}
 
-    /// Per sample and light layer (`layers` of them, `other` last), what
-    /// its points sent: each logged term times its point's path
-    /// throughput, and what no light brought in `other`.
-    fn light_samples<T: PointTerms>(
-        &self,
+impl BandSamples {
+    /// The samples of the band `rows` from its shading `points` (the
+    /// first `primary` of them camera hits) with the shade stage's
+    /// `terms`, one per `chunk` points, split into `lights` where the
+    /// `light` AOV asks for them.
+    pub fn from_points<T: PointTerms>(
+        job: &FrameJob,
+        rows: std::ops::Range<u32>,
         points: &[ShadingPoint],
-        terms: &[T],
-        chunk: usize,
-        (layer_of, count): (&[usize], usize),
-    ) -> Vec<Vec3> {
-        let mut sent = vec![Vec3::ZERO; self.samples() * count];
-        for (chunk_points, log) in points.chunks(chunk).zip(terms) {
-            for (index, point) in chunk_points.iter().enumerate() {
-                let at = point.sample as usize * count;
-                let terms = log.log().map_or(&[][..], |log| log.point_terms(index));
-                for &(light, value) in terms {
-                    sent[at + layer_of[light as usize]] += point.weight * value;
-                }
-                sent[at + count - 1] += point.weight * self.job.environment.unlit(point);
-            }
+        primary: usize,
+        (terms, chunk): (&[T], usize),
+        lights: Option<&LightLayers>,
+    ) -> BandSamples {
+        let samples = ((rows.end - rows.start) * job.width * job.spp) as usize;
+        let mut first_hits = vec![FirstHit::MISS; samples];
+        for point in &points[..primary] {
+            let pixel = point.sample / job.spp;
+            let (x, y) = (pixel % job.width, rows.start + pixel / job.width);
+            let film = film_position(UVec2::new(x, y), job.width, point.sample % job.spp, job.spp);
+            let ray = job.frame.camera.primary_ray(film, job.width, job.height);
+            first_hits[point.sample as usize] = FirstHit {
+                covered: true,
+                albedo: point.material.base_color,
+                normal: point.shading_normal,
+                depth: (point.position - ray.origin).length(),
+            };
         }
-        sent
+        let light = lights.map_or_else(Vec::new, |lights| {
+            light_samples(job, samples, points, (terms, chunk), lights)
+        });
+        BandSamples { first_hits, light }
     }
 
-    /// Appends each pixel's mean of `value(sample, covered)` over its
-    /// samples to `out`.
-    fn resolve_mean(&self, out: &mut AovLayer, value: impl Fn(usize, bool) -> Vec3) {
-        let spp = self.job.spp as usize;
-        for pixel in 0..self.samples() / spp {
+    /// Appends each pixel's mean of `value(sample, its camera hit)` over
+    /// its samples, summed in sample order, to `out`.
+    fn resolve_mean(
+        &self,
+        job: &FrameJob,
+        out: &mut AovLayer,
+        value: impl Fn(usize, &FirstHit) -> Vec3,
+    ) {
+        let spp = job.spp as usize;
+        for pixel in 0..self.first_hits.len() / spp {
             let samples = pixel * spp..(pixel + 1) * spp;
-            let sum: Vec3 = samples.map(|s| value(s, self.covered[s])).sum();
+            let sum: Vec3 = samples.map(|s| value(s, &self.first_hits[s])).sum();
             out.values.extend((sum / spp as f32).to_array());
         }
     }
 
-    /// Appends each pixel's nearest camera hit, in metres along its ray
-    /// (infinite where no sample hit anything), to `out`.
-    fn resolve_depth(&self, out: &mut AovLayer) {
-        let job = self.job;
-        let mut depth = vec![f32::INFINITY; self.samples() / job.spp as usize];
-        for point in self.camera_hits {
-            let pixel = point.sample / job.spp;
-            let (x, y) = (pixel % job.width, self.rows.start + pixel / job.width);
-            let film = film_position(UVec2::new(x, y), job.width, point.sample % job.spp, job.spp);
-            let ray = job.frame.camera.primary_ray(film, job.width, job.height);
-            let distance = (point.position - ray.origin).length();
-            let nearest = &mut depth[pixel as usize];
-            *nearest = nearest.min(distance);
-        }
-        out.values.extend(depth);
+    /// Appends each pixel's nearest camera hit (infinite where no sample
+    /// hit anything) to `out`.
+    fn resolve_depth(&self, job: &FrameJob, out: &mut AovLayer) {
+        let pixels = self.first_hits.chunks(job.spp as usize);
+        out.values.extend(pixels.map(|samples| {
+            (samples.iter()).fold(f32::INFINITY, |nearest, hit| nearest.min(hit.depth))
+        }));
     }
+}
+
+/// Per sample and light layer (`lights`' layers, then `other`), what
+/// `points` sent: each point's logged `terms` (one log per `chunk`
+/// points) summed per layer in light order, each sum times the point's
+/// path throughput; in `other`, what no light brought.
+fn light_samples<T: PointTerms>(
+    job: &FrameJob,
+    samples: usize,
+    points: &[ShadingPoint],
+    (terms, chunk): (&[T], usize),
+    lights: &LightLayers,
+) -> Vec<Vec3> {
+    let count = lights.names.len() + 1;
+    let mut sent = vec![Vec3::ZERO; samples * count];
+    let mut layers = vec![Vec3::ZERO; count - 1];
+    for (chunk_points, log) in points.chunks(chunk).zip(terms) {
+        for (index, point) in chunk_points.iter().enumerate() {
+            layers.fill(Vec3::ZERO);
+            let terms = log.log().map_or(&[][..], |log| log.point_terms(index));
+            for &(light, value) in terms {
+                layers[lights.layer_of[light as usize]] += value;
+            }
+            let at = point.sample as usize * count;
+            for (sum, layer) in sent[at..at + count].iter_mut().zip(&layers) {
+                *sum += point.weight * *layer;
+            }
+            sent[at + count - 1] += point.weight * job.environment.unlit(point);
+        }
+    }
+    sent
 }
 
 #[cfg(test)]

@@ -16,7 +16,7 @@ use std::time::Instant;
 use glam::{UVec2, Vec3};
 use rayon::prelude::*;
 
-use super::aov::AovFrame;
+use super::aov::{AovFrame, BandSamples};
 use super::band::{bands, resolve, TILE};
 use super::sampling::{film_position, lamp_sample};
 use super::{thread_pool, BackendError, RenderError};
@@ -159,7 +159,11 @@ impl CpuBackend {
                 let start = Instant::now();
                 pixels.extend(resolve(job, band_samples, &points, primary_count, &shaded));
                 if let Some(aovs) = &mut aovs {
-                    aovs.add_band(job, rows, &points, primary_count, &terms, SHADE_CHUNK);
+                    let terms = (&terms[..], SHADE_CHUNK);
+                    let lights = aovs.light_layers();
+                    let band =
+                        BandSamples::from_points(job, rows, &points, primary_count, terms, lights);
+                    aovs.add_band(job, &band);
                 }
                 stats.add_stage_time("resolve", start.elapsed().as_secs_f64());
             }

@@ -102,9 +102,8 @@ impl Backend {
         }
     }
 
-    /// Renders one frame by `method` (with the AOV layers `job` asks for,
-    /// which only the CPU backend makes); stage times, ray and point
-    /// counts go to `stats`. The light-mesh methods shade from `light_mesh`, which
+    /// Renders one frame by `method`, with the AOV layers `job` asks for;
+    /// stage times, ray and point counts go to `stats`. The light-mesh methods shade from `light_mesh`, which
     /// the caller keeps across frames so that its masks are reused; the
     /// other methods ignore it.
     pub fn render(
@@ -116,7 +115,7 @@ impl Backend {
     ) -> Result<RenderedFrame, RenderError> {
         match self {
             Backend::Cpu(cpu) => cpu.render(job, method, light_mesh, stats),
-            Backend::Gpu(gpu) => Ok(gpu.render(job, method, light_mesh, stats)?.into()),
+            Backend::Gpu(gpu) => gpu.render(job, method, light_mesh, stats),
         }
     }
 }

@@ -38,6 +38,6 @@ pub struct FrameJob<'a> {
     pub max_depth: u32,
     /// The background and the ambient sky (both off by default).
     pub environment: Environment,
-    /// The AOV layers to make beside the beauty (the CPU backend's).
+    /// The AOV layers to make beside the beauty.
     pub aovs: &'a [Aov],
 }

@@ -7,6 +7,10 @@ use std::fmt;
 /// points and answers, the flat world's seven arrays, the lights, the
 /// points' reaching lights, the mask pool, its directory and its counters.
 pub const STORAGE_BUFFERS: u32 = 14;
+/// Storage buffers formula (2) binds when it keeps its terms per light
+/// layer (`--aovs light`): one more, the points' layer sums. An adapter
+/// that binds fewer renders everything else.
+pub const LAYERED_STORAGE_BUFFERS: u32 = STORAGE_BUFFERS + 1;
 
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
@@ -19,6 +23,8 @@ pub enum GpuError {
     Device { adapter: String, reason: String },
     #[error("--backend gpu: the adapter '{adapter}' binds {limit} storage buffers per shader, the GPU passes need {STORAGE_BUFFERS}")]
     TooFewBuffers { adapter: String, limit: u32 },
+    #[error("--backend gpu: the adapter '{adapter}' binds {limit} storage buffers per shader, the GPU's light layers (--aovs light) need {LAYERED_STORAGE_BUFFERS}; render them with --backend cpu")]
+    TooFewBuffersForLayers { adapter: String, limit: u32 },
     #[error("--backend gpu: {what} takes {bytes} bytes, more than the {limit} bytes the adapter '{adapter}' binds at once")]
     TooLarge {
         what: &'static str,
@@ -89,8 +95,10 @@ impl GpuContext {
         let mut features = wgpu::Features::empty();
         features.set(wgpu::Features::SHADER_F64, f64);
         features.set(wgpu::Features::PASSTHROUGH_SHADERS, own_spirv);
+        let storage_buffers =
+            (available.max_storage_buffers_per_shader_stage).min(LAYERED_STORAGE_BUFFERS);
         let limits = wgpu::Limits {
-            max_storage_buffers_per_shader_stage: STORAGE_BUFFERS,
+            max_storage_buffers_per_shader_stage: storage_buffers,
             max_storage_buffer_binding_size: available.max_storage_buffer_binding_size,
             max_buffer_size: available.max_buffer_size,
             ..wgpu::Limits::downlevel_defaults()
@@ -147,6 +155,19 @@ impl GpuContext {
             .into()),
             None => done,
         }
+    }
+
+    /// Fails in one line where the device binds too few storage buffers
+    /// for formula (2) to keep its terms per light layer.
+    pub fn check_light_layers(&self) -> Result<(), GpuError> {
+        let limit = self.limits.max_storage_buffers_per_shader_stage;
+        if limit < LAYERED_STORAGE_BUFFERS {
+            return Err(GpuError::TooFewBuffersForLayers {
+                adapter: self.info.name.clone(),
+                limit,
+            });
+        }
+        Ok(())
     }
 
     /// Fails with the adapter's limit when `bytes` cannot be bound at once.

@@ -16,7 +16,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::context::{GpuContext, GpuError};
-use super::pass::{Dispatch, WorldPass, WorldUse, BATCH, ITEMS};
+use super::layered::{LayeredPass, PointLayers};
+use super::pass::{Dispatch, WorldUse, BATCH, ITEMS};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::surface::{LevelBuffers, SurfacePoint};
@@ -27,8 +28,9 @@ use crate::render::surface::ShadingPoint;
 /// The binding of the frame's lights.
 const LIGHTS: u32 = 10;
 
-/// `direct_light.wgsl`'s `Light`: an [`OmegaLight`] whose missing range is
-/// 0 rather than infinite, so the shader needs no infinities.
+/// `omega.wgsl`'s `Light`: an [`OmegaLight`] whose missing range is 0
+/// rather than infinite, so the shader needs no infinities, with its layer
+/// of the `light` AOV.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct FlatLight {
@@ -39,11 +41,13 @@ pub struct FlatLight {
     axis: [f32; 3],
     cos_outer: f32,
     cos_inner: f32,
-    _pad: [u32; 3],
+    layer: u32,
+    _pad: [u32; 2],
 }
 
-impl From<&RenderLight> for FlatLight {
-    fn from(light: &RenderLight) -> FlatLight {
+impl FlatLight {
+    /// `light`, adding to the `light` AOV's layer `layer`.
+    fn new(light: &RenderLight, layer: usize) -> FlatLight {
         let light = OmegaLight::from(light);
         FlatLight {
             origin: light.origin.to_array(),
@@ -57,7 +61,8 @@ impl From<&RenderLight> for FlatLight {
             axis: light.axis.to_array(),
             cos_outer: light.cos_outer,
             cos_inner: light.cos_inner,
-            _pad: [0; 3],
+            layer: layer as u32,
+            _pad: [0; 2],
         }
     }
 }
@@ -103,8 +108,22 @@ impl FrameLights {
         self.count
     }
 
+    /// `lights`, all in the `light` AOV's first layer.
     pub fn upload(context: &GpuContext, lights: &[RenderLight]) -> Result<FrameLights, GpuError> {
-        let flat: Vec<FlatLight> = lights.iter().map(FlatLight::from).collect();
+        FrameLights::upload_in_layers(context, lights, &[])
+    }
+
+    /// `lights`, each in its layer of `layer_of` (the first where it has
+    /// none).
+    pub fn upload_in_layers(
+        context: &GpuContext,
+        lights: &[RenderLight],
+        layer_of: &[usize],
+    ) -> Result<FrameLights, GpuError> {
+        let layer = |index: usize| layer_of.get(index).copied().unwrap_or_default();
+        let flat: Vec<FlatLight> = (lights.iter().enumerate())
+            .map(|(index, light)| FlatLight::new(light, layer(index)))
+            .collect();
         Ok(FrameLights {
             buffer: storage(context, "lights", &flat)?,
             count: lights.len() as u32,
@@ -112,17 +131,18 @@ impl FrameLights {
     }
 }
 
-/// The direct-light pipeline, made once per run.
+/// The direct-light pipelines, made once per run (the light layers' when
+/// first asked for).
 pub struct DirectLightPass {
-    pass: WorldPass,
+    pass: LayeredPass,
 }
 
 impl DirectLightPass {
     pub fn new(context: &GpuContext) -> DirectLightPass {
         DirectLightPass {
-            pass: WorldPass::new(
+            pass: LayeredPass::new(
                 context,
-                Entry::DirectLight,
+                (Entry::DirectLight, Entry::DirectLightLayers),
                 WorldUse::Traces,
                 &[LIGHTS],
                 &[],
@@ -131,7 +151,9 @@ impl DirectLightPass {
     }
 
     /// Records formula (1) at each of `level`'s shading points into
-    /// `direct` (zero for rays that hit nothing).
+    /// `direct` (zero for rays that hit nothing), and their terms per
+    /// light layer into `layers` where given.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         context: &GpuContext,
@@ -140,6 +162,7 @@ impl DirectLightPass {
         lights: &FrameLights,
         level: &LevelBuffers,
         direct: &wgpu::Buffer,
+        layers: Option<&PointLayers>,
     ) {
         let reads = [(ITEMS, &level.points), (LIGHTS, &lights.buffer)];
         let count = level.count;
@@ -149,6 +172,7 @@ impl DirectLightPass {
             Dispatch::new(scene, count).with_lights(lights.count),
             &reads,
             direct,
+            layers,
         );
     }
 
@@ -165,7 +189,7 @@ impl DirectLightPass {
         let mut shadow_rays = 0;
         for batch in points.chunks(BATCH) {
             let items: Vec<SurfacePoint> = batch.par_iter().map(SurfacePoint::from).collect();
-            let answers: Vec<DirectLight> = self.pass.run(
+            let answers: Vec<DirectLight> = self.pass.plain().run(
                 context,
                 scene,
                 &items,

@@ -97,6 +97,11 @@ impl Film {
         })
     }
 
+    /// The frame's background and ambient sky, as uploaded.
+    pub fn environment(&self) -> &wgpu::Buffer {
+        &self.environment
+    }
+
     /// Records the adding of `level`'s points, with their `direct` light.
     pub fn accumulate(
         &self,

@@ -4,7 +4,8 @@
 //! GPU for `whitted`; lamp samples made on the CPU for `area`, their
 //! segments tested on the GPU), the film's accumulation, and the next
 //! level's rays with their compaction, of which only the length comes
-//! back. The band's pixels come back once, resolved.
+//! back. The band's pixels come back once, resolved; with `--aovs`, the
+//! AOV film's samples beside them ([`AovFilm`]).
 
 use std::ops::Range;
 use std::time::Instant;
@@ -12,10 +13,12 @@ use std::time::Instant;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
+use super::aov_film::AovFilm;
 use super::camera::CameraRecord;
 use super::context::{GpuContext, GpuError};
 use super::direct::{DirectLight, FrameLights};
 use super::film::Film;
+use super::layered::PointLayers;
 use super::light_mesh::LightMeshShading;
 use super::pass::{answer_buffer, read_back, BATCH};
 use super::scatter::batches;
@@ -23,6 +26,7 @@ use super::scene::{storage, GpuScene};
 use super::surface::{FrameSurfaces, LevelBuffers, PathRay, SceneSurfaces, SurfacePoint};
 use super::Pipelines;
 use crate::accel::Ray;
+use crate::backend::aov::{AovFrame, BandSamples};
 use crate::backend::sampling::lamp_sample;
 use crate::backend::RenderError;
 use crate::render::surface::ShadingPoint;
@@ -55,14 +59,16 @@ pub struct Frame<'a> {
 }
 
 impl Frame<'_> {
-    /// The pixels of `rows`; ray, point and segment counts and stage
+    /// The pixels of `rows`, and their samples for the layers of `aovs`
+    /// where the frame has AOVs; ray, point and segment counts and stage
     /// times go to `stats`.
     pub fn render_band(
         &self,
         rows: Range<u32>,
         method: &mut DirectMethod,
+        aovs: Option<&AovFrame>,
         stats: &mut FrameStats,
-    ) -> Result<Vec<Vec4>, RenderError> {
+    ) -> Result<(Vec<Vec4>, Option<BandSamples>), RenderError> {
         let job = self.job;
         let context = self.context;
         let pixels = ((rows.end - rows.start) * job.width) as usize;
@@ -70,6 +76,11 @@ impl Frame<'_> {
         let band_start = rows.start as u64 * job.width as u64 * job.spp as u64;
         context.checked("rendering a band", || {
             let film = Film::new(context, pixels, job.spp as usize, &job.environment)?;
+            let aov_film = match aovs {
+                Some(aovs) => Some(AovFilm::new(context, band_samples, aovs.light_layers())?),
+                None => None,
+            };
+            let films = (&film, aov_film.as_ref());
 
             let start = Instant::now();
             let mut level = Vec::new();
@@ -84,8 +95,18 @@ impl Frame<'_> {
                     &camera,
                     count,
                 )?;
-                let encoder =
-                    self.shade(encoder, &camera_rays, &film, method, band_start, stats)?;
+                let mut encoder =
+                    self.shade(encoder, &camera_rays, films, method, band_start, stats)?;
+                if let Some(aov_film) = &aov_film {
+                    let passes = self.pipelines.aovs(context);
+                    aov_film.record_first_hits(
+                        passes,
+                        context,
+                        &mut encoder,
+                        self.scene,
+                        &camera_rays,
+                    );
+                }
                 level.extend(self.continue_paths(encoder, &camera_rays, 0)?);
             }
             stats.rays.primary += band_samples as u64;
@@ -97,7 +118,7 @@ impl Frame<'_> {
                 let mut next = Vec::new();
                 for paths in &level {
                     let encoder = context.device.create_command_encoder(&Default::default());
-                    let encoder = self.shade(encoder, paths, &film, method, band_start, stats)?;
+                    let encoder = self.shade(encoder, paths, films, method, band_start, stats)?;
                     next.extend(self.continue_paths(encoder, paths, depth)?);
                 }
                 level = next;
@@ -108,27 +129,37 @@ impl Frame<'_> {
             let developed = film.develop(&self.pipelines.film, context, self.scene)?;
             stats.rays.shadow += developed.shadow_rays;
             stats.shading_points += developed.shading_points;
+            let samples = match &aov_film {
+                Some(aov_film) => Some(aov_film.develop(context)?),
+                None => None,
+            };
             stats.add_stage_time("resolve", start.elapsed().as_secs_f64());
-            Ok(developed.pixels)
+            Ok((developed.pixels, samples))
         })
     }
 
     /// Records a level's closest hits, shading points, direct light and
-    /// accumulation into the film; for `area` and the light mesh, submits
-    /// halfway to bring points to the CPU (lamp samples; demand and fill
-    /// for the points the mask pool does not serve). The encoder to go on
-    /// with.
+    /// accumulation into the film (and the AOV film's light layers, where
+    /// it has them); for `area` and the light mesh, submits halfway to
+    /// bring points to the CPU (lamp samples; demand and fill for the
+    /// points the mask pool does not serve). The encoder to go on with.
     fn shade(
         &self,
         mut encoder: wgpu::CommandEncoder,
         level: &LevelBuffers,
-        film: &Film,
+        (film, aov_film): (&Film, Option<&AovFilm>),
         method: &mut DirectMethod,
         band_start: u64,
         stats: &mut FrameStats,
     ) -> Result<wgpu::CommandEncoder, RenderError> {
         let (context, pipelines, scene) = (self.context, self.pipelines, self.scene);
         self.record_points(&mut encoder, level);
+        let mut layers = match (aov_film, &method) {
+            (Some(aov_film), DirectMethod::Whitted | DirectMethod::LightMesh(_)) => {
+                aov_film.point_layers(context, level.count)?
+            }
+            _ => None,
+        };
         let direct = match method {
             DirectMethod::Whitted => {
                 let direct = answer_buffer::<DirectLight>(context, "direct light", level.count)?;
@@ -139,17 +170,19 @@ impl Frame<'_> {
                     &self.lights,
                     level,
                     &direct,
+                    layers.as_ref(),
                 );
                 direct
             }
             DirectMethod::Area => {
                 let points = read_back(context, encoder, &level.points, level.count)?;
                 encoder = context.device.create_command_encoder(&Default::default());
-                storage(
-                    context,
-                    "direct light",
-                    &self.area_light(&points, band_start)?,
-                )?
+                let layer_of = aov_film.and_then(AovFilm::layer_of);
+                let (direct, sums) = self.area_light(&points, band_start, layer_of)?;
+                if let (Some(sums), Some((_, count))) = (sums, layer_of) {
+                    layers = Some(PointLayers::upload(context, &sums, count)?);
+                }
+                storage(context, "direct light", &direct)?
             }
             DirectMethod::LightMesh(light_mesh) => {
                 let (reach, next) = light_mesh.prepare(
@@ -173,7 +206,7 @@ impl Frame<'_> {
                     &self.lights,
                     level,
                     &reach,
-                    &direct,
+                    (&direct, layers.as_ref()),
                 );
                 direct
             }
@@ -186,6 +219,10 @@ impl Frame<'_> {
             level,
             &direct,
         );
+        if let (Some(aov_film), Some(layers)) = (aov_film, &layers) {
+            let passes = pipelines.aovs(context);
+            aov_film.accumulate(passes, context, &mut encoder, scene, film, level, layers);
+        }
         Ok(encoder)
     }
 
@@ -234,14 +271,19 @@ impl Frame<'_> {
     /// each point's lamp samples are made on the CPU in light order, their
     /// segments tested on the GPU, and the visible samples summed in that
     /// order, so a point gets the CPU backend's bits wherever the segments
-    /// get its answers.
+    /// get its answers. With `layer_of` (which of `count` light layers
+    /// each light adds to), also each point's visible samples summed per
+    /// layer in that order, as formula (1) and (2) sum their terms on the
+    /// GPU (`light_layers.wgsl`).
     fn area_light(
         &self,
         records: &[SurfacePoint],
         band_start: u64,
-    ) -> Result<Vec<DirectLight>, GpuError> {
+        layer_of: Option<(&[usize], usize)>,
+    ) -> Result<(Vec<DirectLight>, Option<LayerSums>), GpuError> {
         let job = self.job;
         let mut direct = Vec::with_capacity(records.len());
+        let mut layers = layer_of.map(|(_, count)| Vec::with_capacity(records.len() * count));
         for chunk in records.chunks(SHADE_CHUNK) {
             let samples: Vec<LampSamples> = chunk
                 .par_iter()
@@ -250,7 +292,8 @@ impl Frame<'_> {
                     if let Some(point) = record.shading_point() {
                         let sample = band_start + point.sample as u64;
                         let lamp = |light| lamp_sample(sample, job.spp, light, point.depth);
-                        area::light_samples(&point, &job.frame.lights, lamp, |_, s| {
+                        area::light_samples(&point, &job.frame.lights, lamp, |light, s| {
+                            samples.lights.push(light);
                             samples.values.push(s.value);
                             samples.rays.push(s.shadow_ray);
                         });
@@ -266,21 +309,34 @@ impl Frame<'_> {
             let mut answers = occluded.into_iter();
             for point_samples in &samples {
                 let mut radiance = Vec3::ZERO;
-                for (value, blocked) in point_samples.values.iter().zip(answers.by_ref()) {
+                let mut sums = layer_of.map(|(_, count)| vec![Vec3::ZERO; count]);
+                let taken = (point_samples.lights.iter()).zip(&point_samples.values);
+                for ((&light, value), blocked) in taken.zip(answers.by_ref()) {
                     if !blocked {
                         radiance += *value;
+                        if let (Some(sums), Some((layer_of, _))) = (&mut sums, layer_of) {
+                            sums[layer_of[light]] += *value;
+                        }
                     }
                 }
                 direct.push(DirectLight::new(radiance, point_samples.rays.len() as u32));
+                if let (Some(layers), Some(sums)) = (&mut layers, sums) {
+                    layers.extend(sums.into_iter().map(|sum| sum.extend(0.0).to_array()));
+                }
             }
         }
-        Ok(direct)
+        Ok((direct, layers))
     }
 }
+
+/// Per point, its visible terms summed per light layer, as
+/// [`PointLayers`] holds them (the fourth component unused).
+type LayerSums = Vec<[f32; 4]>;
 
 /// One point's lamp samples in light order, visibility aside.
 #[derive(Default)]
 struct LampSamples {
+    lights: Vec<usize>,
     values: Vec<Vec3>,
     rays: Vec<Ray>,
 }

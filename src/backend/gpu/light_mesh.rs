@@ -22,6 +22,7 @@ use glam::IVec3;
 use super::context::GpuContext;
 use super::direct::FrameLights;
 use super::fill::FillPass;
+use super::layered::{LayeredPass, PointLayers};
 use super::mask_pool::MaskPool;
 use super::pass::{answer_buffer, read_back, Dispatch, WorldPass, WorldUse, ITEMS};
 use super::scene::{storage, GpuScene};
@@ -51,7 +52,7 @@ const GATHER_SOURCE: u32 = 10;
 pub struct LightMeshPasses {
     coverage: WorldPass,
     gather: WorldPass,
-    shade: WorldPass,
+    shade: LayeredPass,
 }
 
 impl LightMeshPasses {
@@ -71,9 +72,9 @@ impl LightMeshPasses {
                 &[GATHER_SOURCE],
                 &[],
             ),
-            shade: WorldPass::new(
+            shade: LayeredPass::new(
                 context,
-                Entry::LightMesh,
+                (Entry::LightMesh, Entry::LightMeshLayers),
                 WorldUse::Traces,
                 &[LIGHTS, REACH, DIRECTORY, POOL],
                 &[COUNTS],
@@ -225,8 +226,9 @@ impl<'m> LightMeshShading<'m> {
         Ok(read_back(context, encoder, &gathered, indices.len())?)
     }
 
-    /// Records formula (2) at `level`'s points into `direct`, with the
-    /// masks [`LightMeshShading::prepare`] made resident for them.
+    /// Records formula (2) at `level`'s points into `direct` (and their
+    /// terms per light layer into `layers` where given), with the masks
+    /// [`LightMeshShading::prepare`] made resident for them.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -237,7 +239,7 @@ impl<'m> LightMeshShading<'m> {
         lights: &FrameLights,
         level: &LevelBuffers,
         reach: &LevelReach,
-        direct: &wgpu::Buffer,
+        (direct, layers): (&wgpu::Buffer, Option<&PointLayers>),
     ) {
         let (slots, directory) = self.pool.buffers();
         let reads = [
@@ -249,7 +251,7 @@ impl<'m> LightMeshShading<'m> {
             (COUNTS, &self.counts),
         ];
         let dispatch = Dispatch::new(scene, level.count).with_lights(lights.count());
-        (passes.shade).record(context, encoder, dispatch, &reads, direct);
+        (passes.shade).record(context, encoder, dispatch, &reads, direct, layers);
     }
 
     /// The frame's light-mesh statistics, once its `shading_points` are

@@ -12,18 +12,24 @@
 //! shade by formula (2) from masks resident on the GPU ([`mask_pool`]),
 //! bringing back only the points those masks do not serve yet, for the
 //! CPU's demand, whose missing bits the GPU fills ([`fill`],
-//! [`light_mesh`]).
+//! [`light_mesh`]). With `--aovs`, the camera level's hits and, for the
+//! `light` AOV, each level's terms summed per light layer where formula
+//! (1) or (2) makes them ([`layered`]) go to an AOV film beside the
+//! pixels' ([`aov_film`]), whose samples come back for the resolve the
+//! CPU backend uses too.
 //!
 //! The passes round as the CPU does, so a frame differs from the CPU
 //! backend's only where a query answers differently, and tests compare
 //! exactly that: ray by ray, point by point and frame by frame.
 
+mod aov_film;
 mod camera;
 mod context;
 pub(crate) mod direct;
 pub mod fill;
 mod film;
 mod frame;
+mod layered;
 mod light_mesh;
 pub mod mask_pool;
 mod pass;
@@ -34,6 +40,7 @@ mod spirv;
 pub(crate) mod surface;
 pub(crate) mod trace;
 
+use std::sync::OnceLock;
 use std::time::Instant;
 
 pub use context::{GpuContext, GpuError};
@@ -41,15 +48,17 @@ pub use direct::{DirectLightPass, FrameLights};
 pub use scene::GpuScene;
 pub use trace::RayQueries;
 
+use super::aov::{AovFrame, LightLayers};
 use super::band::bands;
 use super::{thread_pool, BackendError, RenderError};
 use crate::accel::{Ray, World};
 use crate::lightmesh::LightMesh;
-use crate::output::Image;
+use crate::output::{Image, RenderedFrame};
 use crate::render::surface::ShadingPoint;
 use crate::render::FrameJob;
-use crate::settings::{LightMeshSettings, Method};
+use crate::settings::{Aov, LightMeshSettings, Method};
 use crate::stats::FrameStats;
+use aov_film::AovPasses;
 use camera::CameraPass;
 use fill::FillPass;
 use film::FilmPasses;
@@ -59,7 +68,8 @@ use mask_pool::MaskPool;
 use scatter::ScatterPasses;
 use surface::{FrameSurfaces, SceneSurfaces, SurfacePass};
 
-/// Every pipeline of the backend, made once per run.
+/// Every pipeline of the backend, made once per run; the AOV film's by
+/// the first frame with AOVs.
 pub struct Pipelines {
     camera: CameraPass,
     queries: RayQueries,
@@ -69,6 +79,7 @@ pub struct Pipelines {
     light_mesh: LightMeshPasses,
     scatter: ScatterPasses,
     film: FilmPasses,
+    aovs: OnceLock<AovPasses>,
 }
 
 impl Pipelines {
@@ -82,7 +93,13 @@ impl Pipelines {
             light_mesh: LightMeshPasses::new(context),
             scatter: ScatterPasses::new(context),
             film: FilmPasses::new(context),
+            aovs: OnceLock::new(),
         }
+    }
+
+    /// The AOV film's pipelines, made the first time they are asked for.
+    fn aovs(&self, context: &GpuContext) -> &AovPasses {
+        self.aovs.get_or_init(|| AovPasses::new(context))
     }
 }
 
@@ -174,7 +191,8 @@ impl GpuBackend {
 
     /// Uploads what `job`'s frame needs that the GPU does not hold yet:
     /// the world as it moved, the scene's meshes and textures for a new
-    /// world, the frame's placement where it changed, and its lights.
+    /// world, the frame's placement where it changed, and its lights (with
+    /// their layers, where the `light` AOV asks for them).
     fn upload_frame(&mut self, job: &FrameJob) -> Result<FrameLights, GpuError> {
         let context = &self.context;
         Self::upload(&mut self.scene, context, job.world)?;
@@ -184,7 +202,13 @@ impl GpuBackend {
             self.frame_surfaces = None;
         }
         FrameSurfaces::update(&mut self.frame_surfaces, context, job.frame)?;
-        FrameLights::upload(context, &job.frame.lights)
+        let lights = &job.frame.lights;
+        if job.aovs.contains(&Aov::Light) {
+            let layers = LightLayers::of(job.scene);
+            FrameLights::upload_in_layers(context, lights, &layers.layer_of)
+        } else {
+            FrameLights::upload(context, lights)
+        }
     }
 
     /// `job`'s frame, whose uploads [`GpuBackend::upload_frame`] made.
@@ -205,17 +229,22 @@ impl GpuBackend {
         }
     }
 
-    /// Renders one frame by `method`; stage times, ray and point counts go
-    /// to `stats`. The light-mesh methods shade from `light_mesh` (an
-    /// error without one), whose masks the backend keeps resident.
+    /// Renders one frame by `method`, with the AOV layers `job` asks for;
+    /// stage times, ray and point counts go to `stats`. The light-mesh
+    /// methods shade from `light_mesh` (an error without one), whose masks
+    /// the backend keeps resident.
     pub fn render(
         &mut self,
         job: &FrameJob,
         method: Method,
         light_mesh: Option<&mut LightMesh>,
         stats: &mut FrameStats,
-    ) -> Result<Image, RenderError> {
+    ) -> Result<RenderedFrame, RenderError> {
         let start = Instant::now();
+        let mut aovs = AovFrame::new(job);
+        if AovFrame::wants_light_terms(job) {
+            self.context.check_light_layers()?;
+        }
         let lights = self.upload_frame(job)?;
         let mut pool = match self.mask_pool.take() {
             Some(pool) => pool,
@@ -240,7 +269,11 @@ impl GpuBackend {
         let pixels = self.pool.install(|| {
             let mut pixels = Vec::with_capacity((job.width * job.height) as usize);
             for rows in bands(job) {
-                pixels.extend(frame.render_band(rows, &mut direct, stats)?);
+                let (band, samples) = frame.render_band(rows, &mut direct, aovs.as_ref(), stats)?;
+                pixels.extend(band);
+                if let (Some(aovs), Some(samples)) = (&mut aovs, samples) {
+                    aovs.add_band(job, &samples);
+                }
             }
             Ok::<_, RenderError>(pixels)
         })?;
@@ -248,10 +281,14 @@ impl GpuBackend {
             light_mesh.finish(&self.context, stats)?;
         }
         self.mask_pool = Some(pool);
-        Ok(Image {
+        let image = Image {
             width: job.width,
             height: job.height,
             pixels,
+        };
+        Ok(RenderedFrame {
+            image,
+            aovs: aovs.map_or_else(Vec::new, AovFrame::into_layers),
         })
     }
 

@@ -78,12 +78,14 @@ pub enum WorldUse {
 
 /// What one recording of a pass runs over: the world (its arrays, for the
 /// passes that trace, and its parameters), how many items (at most
-/// [`BATCH`]: one invocation each) and how many lights.
+/// [`BATCH`]: one invocation each), how many lights and how many light
+/// layers (the `light` AOV's).
 #[derive(Clone, Copy)]
 pub struct Dispatch<'a> {
     scene: &'a GpuScene,
     items: usize,
     lights: u32,
+    layers: u32,
 }
 
 impl<'a> Dispatch<'a> {
@@ -92,11 +94,17 @@ impl<'a> Dispatch<'a> {
             scene,
             items,
             lights: 0,
+            layers: 0,
         }
     }
 
     pub fn with_lights(self, lights: u32) -> Dispatch<'a> {
         Dispatch { lights, ..self }
+    }
+
+    pub fn with_layers(self, layers: usize) -> Dispatch<'a> {
+        let layers = layers as u32;
+        Dispatch { layers, ..self }
     }
 }
 
@@ -188,10 +196,11 @@ impl WorldPass {
             scene,
             items: count,
             lights,
+            layers,
         } = dispatch;
         debug_assert!(count <= BATCH);
         let device = &context.device;
-        let params = scene.params(count as u32, lights);
+        let params = scene.params(count as u32, lights, layers);
         let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("pass params"),
             contents: bytemuck::bytes_of(&params),

@@ -30,6 +30,8 @@ pub struct Params {
     pub inv_limit: f32,
     /// Lights of the direct-light pass.
     pub light_count: u32,
+    /// Light layers of the `light` AOV's passes (0 elsewhere).
+    pub layer_count: u32,
 }
 
 struct StaticBuffers {
@@ -85,7 +87,7 @@ impl GpuScene {
 
     /// The uniform for a batch of `item_count` items and `light_count`
     /// lights over this scene.
-    pub fn params(&self, item_count: u32, light_count: u32) -> Params {
+    pub fn params(&self, item_count: u32, light_count: u32, layer_count: u32) -> Params {
         Params {
             item_count,
             static_node_count: self.static_part.node_count,
@@ -95,6 +97,7 @@ impl GpuScene {
             binary_scale: crate::accel::node_test::BINARY_SCALE,
             inv_limit: crate::accel::node_test::INV_LIMIT,
             light_count,
+            layer_count,
         }
     }
 

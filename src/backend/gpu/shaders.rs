@@ -14,7 +14,9 @@ pub enum Arithmetic {
 /// The compute entry points: camera rays, the two ray queries, shading
 /// points, formula (1), formula (2) with its coverage of the points and
 /// the gathering of those it does not cover, the Whitted recursion's rays and their
-/// compaction, and the film.
+/// compaction, and the film; formula (1) and (2) again keeping their
+/// terms per light layer, and the AOV film (camera hits, light layers),
+/// for `--aovs`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Entry {
     CameraRays,
@@ -32,11 +34,15 @@ pub enum Entry {
     Compact,
     Accumulate,
     Resolve,
+    DirectLightLayers,
+    LightMeshLayers,
+    FirstHits,
+    AccumulateLayers,
 }
 
 impl Entry {
     #[cfg(test)]
-    pub const ALL: [Entry; 15] = [
+    pub const ALL: [Entry; 19] = [
         Entry::CameraRays,
         Entry::ClosestHit,
         Entry::AnyHit,
@@ -52,6 +58,10 @@ impl Entry {
         Entry::Compact,
         Entry::Accumulate,
         Entry::Resolve,
+        Entry::DirectLightLayers,
+        Entry::LightMeshLayers,
+        Entry::FirstHits,
+        Entry::AccumulateLayers,
     ];
 
     pub fn name(self) -> &'static str {
@@ -60,17 +70,19 @@ impl Entry {
             Entry::ClosestHit => "closest_hit",
             Entry::AnyHit => "any_hit",
             Entry::Surface => "surface",
-            Entry::DirectLight => "direct_light",
+            Entry::DirectLight | Entry::DirectLightLayers => "direct_light",
             Entry::LightMeshCoverage => "light_mesh_coverage",
             Entry::GatherPoints => "gather_points",
             Entry::FillSegments => "fill_segments",
-            Entry::LightMesh => "light_mesh",
+            Entry::LightMesh | Entry::LightMeshLayers => "light_mesh",
             Entry::Scatter => "scatter",
             Entry::ScanBlocks => "scan_blocks",
             Entry::ScanSums => "scan_sums",
             Entry::Compact => "compact",
             Entry::Accumulate => "accumulate",
             Entry::Resolve => "resolve",
+            Entry::FirstHits => "first_hits",
+            Entry::AccumulateLayers => "accumulate_layers",
         }
     }
 }
@@ -81,6 +93,12 @@ const PATH: &str = include_str!("shaders/path.wgsl");
 const SURFACE_POINT: &str = include_str!("shaders/surface_point.wgsl");
 const SCHLICK: &str = include_str!("shaders/schlick.wgsl");
 const ENVIRONMENT: &str = include_str!("shaders/environment.wgsl");
+const UNLIT: &str = include_str!("shaders/unlit.wgsl");
+const SAMPLE_RUNS: &str = include_str!("shaders/sample_runs.wgsl");
+/// Where formula (1) and (2) put each light's term besides their sum:
+/// nowhere, or the point's light layers (`--aovs light`).
+const LIGHT_SUM: &str = include_str!("shaders/light_sum.wgsl");
+const LIGHT_LAYERS: &str = include_str!("shaders/light_layers.wgsl");
 /// Omega, formula (1) at a point, and the light mesh's nodes.
 const OMEGA: &str = include_str!("shaders/omega.wgsl");
 const FORMULA_ONE: &str = include_str!("shaders/formula_one.wgsl");
@@ -133,6 +151,11 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
         Arithmetic::ExactF64 => include_str!("shaders/exact_f64.wgsl"),
         Arithmetic::PlainF32 => include_str!("shaders/exact_f32.wgsl"),
     };
+    let terms: &[&str] = match entry {
+        Entry::DirectLight | Entry::LightMesh | Entry::FillSegments => &[LIGHT_SUM],
+        Entry::DirectLightLayers | Entry::LightMeshLayers => &[LIGHT_LAYERS],
+        _ => &[],
+    };
     let (tracing, own): (&[&str], &[&str]) = match entry {
         Entry::CameraRays => (&[], &[VECTOR, PATH, include_str!("shaders/camera.wgsl")]),
         Entry::ClosestHit => (&TRACING, &[PATH, include_str!("shaders/closest_hit.wgsl")]),
@@ -152,14 +175,14 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
                 include_str!("shaders/surface.wgsl"),
             ],
         ),
-        Entry::DirectLight => (&TRACING, &DIRECT_LIGHT),
+        Entry::DirectLight | Entry::DirectLightLayers => (&TRACING, &DIRECT_LIGHT),
         Entry::LightMeshCoverage => (&[], &LIGHT_MESH_COVERAGE),
         Entry::GatherPoints => (
             &[],
             &[SURFACE_POINT, include_str!("shaders/gather_points.wgsl")],
         ),
         Entry::FillSegments => (&TRACING, &FILL_SEGMENTS),
-        Entry::LightMesh => (&TRACING, &LIGHT_MESH),
+        Entry::LightMesh | Entry::LightMeshLayers => (&TRACING, &LIGHT_MESH),
         Entry::Scatter => (
             &[],
             &[
@@ -179,15 +202,38 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
                 VECTOR,
                 SURFACE_POINT,
                 ENVIRONMENT,
+                UNLIT,
+                SAMPLE_RUNS,
                 include_str!("shaders/accumulate.wgsl"),
             ],
         ),
         Entry::Resolve => (&[], &[ENVIRONMENT, include_str!("shaders/resolve.wgsl")]),
+        Entry::FirstHits => (
+            &[],
+            &[
+                VECTOR,
+                PATH,
+                SURFACE_POINT,
+                include_str!("shaders/first_hits.wgsl"),
+            ],
+        ),
+        Entry::AccumulateLayers => (
+            &[],
+            &[
+                VECTOR,
+                SURFACE_POINT,
+                ENVIRONMENT,
+                UNLIT,
+                SAMPLE_RUNS,
+                include_str!("shaders/accumulate_layers.wgsl"),
+            ],
+        ),
     };
     [prelude, COMMON]
         .iter()
         .chain(tracing)
         .chain(own)
+        .chain(terms)
         .copied()
         .collect::<Vec<_>>()
         .join("\n")
@@ -223,6 +269,7 @@ mod tests {
     #[test]
     fn wgsl_structs_match_the_uploaded_records() {
         use crate::accel::flat::{FlatBinaryNode, FlatInstance, FlatWideNode};
+        use crate::backend::gpu::aov_film::FirstHitRecord;
         use crate::backend::gpu::camera::CameraRecord;
         use crate::backend::gpu::direct::{DirectLight, FlatLight};
         use crate::backend::gpu::fill::FillSegment;
@@ -242,7 +289,7 @@ mod tests {
             (
                 "Params",
                 size_of::<Params>(),
-                vec![0, 4, 8, 12, 16, 20, 24, 28],
+                vec![0, 4, 8, 12, 16, 20, 24, 28, 32],
             ),
             (
                 "WideNode",
@@ -301,9 +348,10 @@ mod tests {
             (
                 "Light",
                 size_of::<FlatLight>(),
-                vec![0, 12, 16, 28, 32, 44, 48, 52],
+                vec![0, 12, 16, 28, 32, 44, 48, 52, 56],
             ),
             ("DirectLight", size_of::<DirectLight>(), vec![0, 12]),
+            ("FirstHit", size_of::<FirstHitRecord>(), vec![0, 12, 16, 28]),
             (
                 "Environment",
                 size_of::<EnvironmentRecord>(),

@@ -2,9 +2,8 @@
 // (`Environment::shaded_value` and `band.rs`'s `resolve`): each point's
 // emission (and the ambient sky on its diffuse part) plus its direct
 // light, times its path throughput, added to its sample's radiance in
-// point order. A sample's points are consecutive in a level, so the first
-// invocation of each run adds the whole run, in order, and no two
-// invocations touch one sample: the sums are the CPU's, bit for bit.
+// point order, a sample's run of points at a time (`sample_runs.wgsl`):
+// the sums are the CPU's, bit for bit.
 // Camera hits (depth 0) mark their sample covered; the shading points and
 // the shadow segments are counted (integer atomics: any order gives the
 // same count).
@@ -21,26 +20,13 @@ struct DirectLight {
 // Shading points, then shadow segments.
 @group(0) @binding(18) var<storage, read_write> counters: array<atomic<u32>, 2>;
 
-// `Environment::unlit`: emission, plus the sky times the diffuse albedo
-// (`environment::diffuse_albedo`) where there is a sky.
-fn unlit(point: SurfacePoint) -> vec3<f32> {
-    if environment.sky == 0u {
-        return point.emissive;
-    }
-    let albedo = scale3(point.base_color, mul(1.0 - point.transmission, 1.0 - point.metallic));
-    return point.emissive + mul3(environment.ambient, albedo);
-}
-
 @compute @workgroup_size(64)
 fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
-    if index >= params.item_count {
+    if !starts_run(index) {
         return;
     }
     let sample = points[index].sample;
-    if index > 0u && points[index - 1u].sample == sample {
-        return;
-    }
     var value = samples[sample];
     var hits = 0u;
     var shadow_rays = 0u;

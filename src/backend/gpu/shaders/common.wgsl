@@ -15,6 +15,8 @@ struct Params {
     inv_limit: f32,
     // Lights of the direct-light pass (0 in ray queries).
     light_count: u32,
+    // Light layers of the `light` AOV's passes (0 elsewhere).
+    layer_count: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;

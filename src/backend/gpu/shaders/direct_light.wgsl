@@ -14,5 +14,6 @@ fn direct_light(@builtin(global_invocation_id) id: vec3<u32>) {
         direct[index] = DirectLight(vec3<f32>(0.0), 0u);
         return;
     }
+    begin_terms(index);
     direct[index] = formula_one(shade_point(surface));
 }

@@ -1,6 +1,7 @@
 // Formula (1) at a shading point: for each light in light order,
 // Omega(i, P) (`omega.wgsl`) and, where it brings light, the shadow
-// segment's any-hit test; the visible terms summed in that order. A point
+// segment's any-hit test; the visible terms summed in that order, and
+// each handed to `keep_term` (the `light` AOV's, or nothing). A point
 // gets the CPU backend's bits wherever its shadow segments get its
 // answers.
 
@@ -58,7 +59,9 @@ fn formula_one(point: ShadePoint) -> DirectLight {
             let light = lights[first + firstTrailingBit(bringing)];
             bringing &= bringing - 1u;
             if !shadowed(origin, light) {
-                radiance += omega(point, light);
+                let term = omega(point, light);
+                radiance += term;
+                keep_term(light, term);
             }
         }
     }

@@ -14,7 +14,8 @@
 // CPU's answers. Lights are taken 32 at a time (one u32 of each mask
 // group): the set is walked once per 32 lights, summing for each light
 // the weights of the kept nodes that see it in bit-sliced counters, so
-// no per-light array is needed.
+// no per-light array is needed. Each term also goes to `keep_term` (the
+// `light` AOV's, or nothing).
 
 @group(0) @binding(1) var<storage, read> points: array<SurfacePoint>;
 @group(0) @binding(7) var<storage, read_write> direct: array<DirectLight>;
@@ -133,6 +134,7 @@ fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
         direct[index] = DirectLight(vec3<f32>(0.0), 0u);
         return;
     }
+    begin_terms(index);
     let point = shade_point(surface);
     let ball = half_ball(point.position, point.geometric_normal);
     let origin = offset_ray_origin(point.position, point.geometric_normal);
@@ -160,15 +162,17 @@ fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
         while lit != 0u {
             let bit = firstTrailingBit(lit);
             lit &= lit - 1u;
-            let value = omega(point, lights[word * 32u + bit]);
+            let light = lights[word * 32u + bit];
+            let value = omega(point, light);
             if all(value == vec3<f32>(0.0)) {
                 continue;
             }
-            if (t.all >> bit & 1u) == 1u {
-                radiance += value;
-            } else {
-                radiance += scale3(value, div(f32(count_of(t, bit)), f32(total)));
+            var term = value;
+            if (t.all >> bit & 1u) == 0u {
+                term = scale3(value, div(f32(count_of(t, bit)), f32(total)));
             }
+            radiance += term;
+            keep_term(light, term);
         }
     }
     direct[index].radiance = radiance;

@@ -32,7 +32,9 @@ struct Light {
     axis: vec3<f32>,
     cos_outer: f32,
     cos_inner: f32,
-    _pad: array<u32, 3>,
+    // Its layer of the `light` AOV (`light_layers.wgsl`).
+    layer: u32,
+    _pad: array<u32, 2>,
 }
 
 @group(0) @binding(10) var<storage, read> lights: array<Light>;
