@@ -16,10 +16,10 @@ use crate::import::{self, ImportError};
 use crate::lightmesh::persistent::PersistentLightMesh;
 use crate::lightmesh::{LightMesh, LightMeshError};
 use crate::output::{self, FramePattern, OutputError, RenderedFrame, ShotSheet};
-use crate::render::frame::{CameraChoice, FrameScene, PlaceError, SceneBounds};
-use crate::render::FrameJob;
 use crate::plan::Plan;
+use crate::render::frame::{CameraChoice, FrameScene, PlaceError, SceneBounds};
 use crate::render::shadow_split::ShadowSplit;
+use crate::render::FrameJob;
 use crate::scene::pose::{dynamic_nodes, Pose};
 use crate::scene::SceneDesc;
 use crate::schedule::{FrameDelta, FrameSet, Timeline};
@@ -172,11 +172,18 @@ impl Sequence {
         let anchor = Plan::anchor(&scene);
         let scene_radius = bounds.map_or(0.0, |b| b.radius() as f32);
         let choice = CameraChoice::First;
-        let placed = FrameScene::place(&scene, static_pose, anchor, choice, &Default::default(), &dynamic)
-            .map_err(|source| RunError::Place {
-                file: scene_file.clone(),
-                source,
-            })?;
+        let placed = FrameScene::place(
+            &scene,
+            static_pose,
+            anchor,
+            choice,
+            &Default::default(),
+            &dynamic,
+        )
+        .map_err(|source| RunError::Place {
+            file: scene_file.clone(),
+            source,
+        })?;
         Ok(Sequence {
             world: placed.build_world(&scene),
             light_mesh: PersistentLightMesh::new(&scene, &placed),
@@ -255,12 +262,18 @@ impl Sequence {
         };
         let pose = Pose::at(&self.scene, self.clips, time);
         let lamps = &settings.lamps;
-        let mut placed =
-            FrameScene::place(&self.scene, &pose, self.anchor, camera, lamps, &self.dynamic)
-                .map_err(|source| RunError::Place {
-                    file: self.scene_file.clone(),
-                    source,
-                })?;
+        let mut placed = FrameScene::place(
+            &self.scene,
+            &pose,
+            self.anchor,
+            camera,
+            lamps,
+            &self.dynamic,
+        )
+        .map_err(|source| RunError::Place {
+            file: self.scene_file.clone(),
+            source,
+        })?;
         if let Some(plan) = &self.plan {
             plan.apply(&mut placed);
         }
@@ -309,7 +322,10 @@ impl Sequence {
             return Ok(frame.clone());
         }
         let file = &self.scene_file;
-        let light_mesh = if self.shadows.uses_light_mesh(settings.method, &placed.lights) {
+        let light_mesh = if self
+            .shadows
+            .uses_light_mesh(settings.method, &placed.lights)
+        {
             let mesh = &mut self.light_mesh;
             Some(prepared_light_mesh(
                 mesh,
@@ -460,18 +476,21 @@ fn load_planned(job: &Job) -> Result<(SceneDesc, ClipSelection, Plan), RunError>
     let scene = import::load(job.scene_path)?;
     let file = job.scene_path.display().to_string();
     let clips = match &settings.clip {
-        Some(clip) => ClipSelection::parse(&scene, clip)
-            .map_err(|fault| RunError::Clip {
-                file: file.clone(),
-                fault,
-            })?,
+        Some(clip) => ClipSelection::parse(&scene, clip).map_err(|fault| RunError::Clip {
+            file: file.clone(),
+            fault,
+        })?,
         None => ClipSelection::All,
     };
     let planned = match &settings.plan_frames {
-        Some(text) => FrameSet::parse(text).map_err(|fault| RunError::PlanFrames(fault.to_string()))?,
+        Some(text) => {
+            FrameSet::parse(text).map_err(|fault| RunError::PlanFrames(fault.to_string()))?
+        }
         None => job.frames.clone(),
     };
-    if let Some(&frame) = (job.frames.frames().iter()).find(|f| planned.frames().binary_search(f).is_err()) {
+    if let Some(&frame) =
+        (job.frames.frames().iter()).find(|f| planned.frames().binary_search(f).is_err())
+    {
         return Err(RunError::PlanFramesMissFrame {
             planned: settings.plan_frames.clone().unwrap_or_default(),
             frame,

@@ -258,7 +258,11 @@ fn shade_by_method<T: PointTerms>(
     let lights = &job.frame.lights;
     let shadows = job.shadows;
     let segments_before = lightmesh.fill_segments;
-    let formula_one = || shadows.lanes(method, lights, |role| matches!(role, LightRole::FormulaOne { .. }));
+    let formula_one = || {
+        shadows.lanes(method, lights, |role| {
+            matches!(role, LightRole::FormulaOne { .. })
+        })
+    };
     let (shaded, terms, band_counts) = match (method, light_mesh) {
         (Method::Whitted, _) => formula_one_stage(job, points, lanes, stats),
         (Method::Auto, _) if !shadows.uses_light_mesh(method, lights) => {
@@ -290,9 +294,7 @@ fn shade_by_method<T: PointTerms>(
             mesh_stage.shade(job, points, mesh, stats, lightmesh)?
         }
         (Method::Auto, Some(mesh)) => {
-            let formula_one = shadows
-                .uses_formula_one(method, lights)
-                .then(formula_one);
+            let formula_one = shadows.uses_formula_one(method, lights).then(formula_one);
             let mesh_lanes = shadows.lanes(method, lights, |role| role == LightRole::LightMesh);
             let mesh_stage = MeshStage {
                 lanes: &mesh_lanes,
@@ -308,9 +310,9 @@ fn shade_by_method<T: PointTerms>(
     stats.shadow_classes.add_rays(band_counts.shadow_rays);
     // Every occlusion segment is a shadow ray: formula (1)'s, the fill's
     // node-to-light ones and LMM's point-to-node tests.
-    stats.rays.shadow += band_counts.shadow_rays.total() + band_counts.p2n_tests
-        + lightmesh.fill_segments
-        - segments_before;
+    stats.rays.shadow +=
+        band_counts.shadow_rays.total() + band_counts.p2n_tests + lightmesh.fill_segments
+            - segments_before;
     Ok((shaded, terms, band_counts))
 }
 

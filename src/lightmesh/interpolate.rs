@@ -20,8 +20,8 @@ use crate::accel::{Ray, World};
 use crate::bits::set_bits;
 use crate::render::light_terms::LightTerms;
 use crate::render::omega::{LightLanes, PointLanes, LANES};
-use crate::render::surface::ShadingPoint;
 use crate::render::shadow_split::ShadowSplit;
+use crate::render::surface::ShadingPoint;
 use crate::render::whitted;
 use crate::stats::ClassRays;
 

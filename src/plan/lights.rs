@@ -54,7 +54,9 @@ pub enum Reason {
 impl std::fmt::Display for Reason {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match *self {
-            Reason::NoPower => f.write_str("no power (colour × intensity is 0) in every planned frame"),
+            Reason::NoPower => {
+                f.write_str("no power (colour × intensity is 0) in every planned frame")
+            }
             Reason::NothingInView => f.write_str("the camera sees no surface in any planned frame"),
             Reason::OutOfReach {
                 range,
@@ -171,16 +173,20 @@ fn classify(
                 behind: found.behind,
             },
         ),
-        (true, Occluders::OnlyPlane(axis, value)) => {
-            (Shadows::Unshadowed, Reason::OnlyPlaneInReach { axis, value })
-        }
+        (true, Occluders::OnlyPlane(axis, value)) => (
+            Shadows::Unshadowed,
+            Reason::OnlyPlaneInReach { axis, value },
+        ),
         (true, _) if radius > 0.0 => (Shadows::Soft, Reason::LampRadius(radius)),
         (true, _) => (Shadows::Hard, Reason::NoLampRadius),
     }
 }
 
 fn first_lamp_radius(planned: &PlannedFrames, index: usize) -> f32 {
-    planned.placed.first().map_or(0.0, |p| p.lights[index].lamp_radius)
+    planned
+        .placed
+        .first()
+        .map_or(0.0, |p| p.lights[index].lamp_radius)
 }
 
 /// Looks in one frame for a visible surface `light` can send something

@@ -32,11 +32,12 @@ pub fn plan(scene: &SceneDesc, planned: &PlannedFrames) -> Vec<ObjectPlan> {
     (0..first.objects.len())
         .map(|index| {
             let node = first.objects[index].node;
-            let moved_from = |before: &crate::render::frame::FrameScene,
-                              after: &crate::render::frame::FrameScene| {
-                before.objects[index].to_render != after.objects[index].to_render
-                    || before.deformed[index] != after.deformed[index]
-            };
+            let moved_from =
+                |before: &crate::render::frame::FrameScene,
+                 after: &crate::render::frame::FrameScene| {
+                    before.objects[index].to_render != after.objects[index].to_render
+                        || before.deformed[index] != after.deformed[index]
+                };
             let moves: Vec<u32> = (planned.placed.windows(2).zip(&planned.numbers[1..]))
                 .filter(|(pair, _)| moved_from(&pair[0], &pair[1]))
                 .map(|(_, &frame)| frame)

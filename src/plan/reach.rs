@@ -110,9 +110,7 @@ pub fn common_plane(points: &[Vec3]) -> Option<(usize, f32)> {
 /// before its end.
 pub fn off_plane(light: &RenderLight, (axis, value): (usize, f32)) -> bool {
     match light.source {
-        LightSource::Directional { towards } => {
-            f64::from(towards[axis]).abs() > DIRECTION_MARGIN
-        }
+        LightSource::Directional { towards } => f64::from(towards[axis]).abs() > DIRECTION_MARGIN,
         LightSource::Point { position } | LightSource::Spot { position, .. } => {
             let distance = (f64::from(position[axis]) - f64::from(value)).abs();
             distance > PLANE_MARGIN + f64::from(light.lamp_radius)

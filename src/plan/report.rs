@@ -29,12 +29,16 @@ pub struct WorkEstimate {
 
 impl WorkEstimate {
     pub fn of(settings: &Settings, lights: &[LightPlan]) -> WorkEstimate {
-        let points = u64::from(settings.width) * u64::from(settings.height) * u64::from(settings.spp);
+        let points =
+            u64::from(settings.width) * u64::from(settings.height) * u64::from(settings.spp);
         let count = |wanted: &dyn Fn(Shadows) -> bool| {
             lights.iter().filter(|light| wanted(light.shadows)).count() as u64
         };
         let (ray_lights, mesh_lights) = match settings.method {
-            Method::Auto => (count(&|s| s == Shadows::Hard), count(&|s| s == Shadows::Soft)),
+            Method::Auto => (
+                count(&|s| s == Shadows::Hard),
+                count(&|s| s == Shadows::Soft),
+            ),
             Method::Whitted | Method::Area => {
                 (count(&|s| matches!(s, Shadows::Hard | Shadows::Soft)), 0)
             }

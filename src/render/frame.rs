@@ -13,9 +13,9 @@ use super::camera::RenderCamera;
 use super::light::RenderLight;
 use crate::accel::{World, WorldObject};
 use crate::anim::deform::{deformed_mesh, DeformedMesh};
-use crate::scene::pose::Pose;
 #[cfg(doc)]
 use crate::scene::pose::dynamic_nodes;
+use crate::scene::pose::Pose;
 use crate::scene::{Light, Material, Projection, SceneDesc};
 use crate::settings::LampSettings;
 

@@ -22,8 +22,8 @@ use crate::accel::World;
 use crate::scene::SceneDesc;
 use crate::settings::Aov;
 use environment::Environment;
-use shadow_split::ShadowSplit;
 use frame::FrameScene;
+use shadow_split::ShadowSplit;
 
 /// Everything a backend needs to render one frame.
 #[derive(Clone, Copy)]

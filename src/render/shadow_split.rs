@@ -78,8 +78,12 @@ impl ShadowSplit {
 
     /// Whether `method` shades some light of `lights` by formula (1).
     pub fn uses_formula_one(&self, method: Method, lights: &[RenderLight]) -> bool {
-        self.indices(lights)
-            .any(|index| matches!(self.role(method, index, lights), LightRole::FormulaOne { .. }))
+        self.indices(lights).any(|index| {
+            matches!(
+                self.role(method, index, lights),
+                LightRole::FormulaOne { .. }
+            )
+        })
     }
 
     /// The lights' indices: those of `lights`, and those the plan classed
@@ -98,13 +102,15 @@ impl ShadowSplit {
         wanted: impl Fn(LightRole) -> bool,
     ) -> Vec<RenderLight> {
         (lights.iter().enumerate())
-            .map(|(index, light)| match wanted(self.role(method, index, lights)) {
-                true => *light,
-                false => RenderLight {
-                    power: Vec3::ZERO,
-                    ..*light
+            .map(
+                |(index, light)| match wanted(self.role(method, index, lights)) {
+                    true => *light,
+                    false => RenderLight {
+                        power: Vec3::ZERO,
+                        ..*light
+                    },
                 },
-            })
+            )
             .collect()
     }
 
