@@ -72,7 +72,7 @@ fn yard_with_useless_lights() -> SceneDesc {
         DMat4::from_translation(DVec3::new(0.0, -1.0, 0.0)),
     );
     scene.lights[3].range = Some(0.5);
-    let up = DMat4::from_translation(DVec3::new(0.0, 4.0, 0.0))
+    let up = DMat4::from_translation(DVec3::new(0.0, 10.0, 0.0))
         * DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2);
     add_light(
         &mut scene,
@@ -191,8 +191,9 @@ fn a_light_behind_every_visible_surface_is_none() {
         [Shadows::Unshadowed, Shadows::None]
     );
     let (with, _) = render_one(scene.clone(), &settings);
-    scene.nodes.retain(|node| node.light != Some(1));
-    scene.lights.truncate(1);
+    for node in &mut scene.nodes {
+        node.light = node.light.filter(|&light| light != 1);
+    }
     let (without, _) = render_one(scene, &settings);
     assert_eq!(with.pixels, without.pixels);
 }
@@ -240,7 +241,8 @@ fn secondary_rays_only_where_a_mirror_is_seen() {
             ..Material::default()
         },
     );
-    add_quads(&mut scene, &[floor_quad(0.01, 0.4)], 1, mirror);
+    let beside_the_box = floor_quad(0.01, 0.4).map(|corner| corner + Vec3::new(1.5, 0.0, 1.5));
+    add_quads(&mut scene, &[beside_the_box], 1, mirror);
     let plan = Plan::make(&scene, &settings, ClipSelection::All, &frames).unwrap();
     let spawning: Vec<usize> = (plan.materials.iter())
         .filter(|m| m.spawns_secondary)
@@ -281,7 +283,7 @@ fn yard_with_a_late_car() -> SceneDesc {
 #[test]
 fn an_object_animated_outside_the_planned_frames_is_static_and_cached() {
     let cache = tempfile::tempdir().unwrap();
-    let mut settings = base_settings(Method::Lmm1);
+    let mut settings = base_settings(Method::Lmm);
     settings.cache_dir = Some(cache.path().display().to_string());
     let frames = FrameSet::parse("0..4").unwrap();
     let plan = Plan::make(
@@ -302,11 +304,11 @@ fn an_object_animated_outside_the_planned_frames_is_static_and_cached() {
     )
     .unwrap();
     assert!(plan.objects.last().unwrap().dynamic);
-    assert_eq!(plan.objects.last().unwrap().moves_in, ["49..72"]);
+    assert_eq!(plan.objects.last().unwrap().moves_in, ["49..73"]);
 
     let mut sequence = planned(yard_with_a_late_car(), &settings, "0..4");
     sequence.set_cache_dir(Some(cache.path().to_owned()));
-    let as_static = render_frames(sequence, &settings, &[0, 1, 2, 3]);
+    render_frames(sequence, &settings, &[0, 1, 2, 3]);
     let files = || {
         std::fs::read_dir(cache.path())
             .unwrap()
@@ -352,16 +354,30 @@ fn an_object_animated_outside_the_planned_frames_is_static_and_cached() {
         2,
         "the planned static set is part of the cache key"
     );
+}
 
-    let mut dynamic_settings = settings.clone();
-    dynamic_settings.cache_dir = None;
-    let as_dynamic = render_frames(
-        planned(yard_with_a_late_car(), &dynamic_settings, "0..96"),
-        &dynamic_settings,
-        &[0, 1, 2, 3],
-    );
-    for ((a, _), (b, _)) in as_static.iter().zip(&as_dynamic) {
-        assert_eq!(a.image.pixels, b.image.pixels);
+#[test]
+fn frames_with_the_late_object_static_equal_those_with_it_dynamic() {
+    for method in [Method::Whitted, Method::Lmm] {
+        let settings = base_settings(method);
+        let frames = [0, 1, 2, 3];
+        let as_static = render_frames(
+            planned(yard_with_a_late_car(), &settings, "0..4"),
+            &settings,
+            &frames,
+        );
+        let as_dynamic = render_frames(
+            planned(yard_with_a_late_car(), &settings, "0..96"),
+            &settings,
+            &frames,
+        );
+        for ((a, _), (b, _)) in as_static.iter().zip(&as_dynamic) {
+            // Static objects are traced in render space, dynamic ones in
+            // object space through their instance transform: hits agree
+            // to rounding, not to the bit.
+            let rms = rms_difference(&a.image, &b.image);
+            assert!(rms < 1e-3, "{method}: rms {rms}");
+        }
     }
 }
 
