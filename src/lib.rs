@@ -9,6 +9,7 @@ pub mod bits;
 pub mod import;
 pub mod lightmesh;
 pub mod output;
+pub mod plan;
 pub mod render;
 pub mod scene;
 pub mod schedule;

@@ -20,6 +20,7 @@ use lmanim::anim::ClipSelection;
 use lmanim::import;
 use lmanim::lightmesh::kernel::Kernel;
 use lmanim::output::{self, ExrPrecision, FramePattern};
+use lmanim::plan;
 use lmanim::schedule::{FrameSet, Timeline};
 use lmanim::sequence::{self, Job};
 use lmanim::settings::{Aov, BackendKind, LightMeshSettings, Method, Settings};
@@ -54,6 +55,20 @@ enum Command {
     /// them to the disk cache, without rendering: a farm job's first task,
     /// so that its render tasks start warm. Takes a render's arguments.
     Warm(RenderArgs),
+    /// Print the effect plan: each light's shadow class and why, the
+    /// objects that move within the frames, the materials that spawn
+    /// secondary rays, the frames copied and the work per frame. Takes a
+    /// render's arguments.
+    Plan(PlanArgs),
+}
+
+#[derive(Debug, Args)]
+struct PlanArgs {
+    #[command(flatten)]
+    render: RenderArgs,
+    /// Print the plan as JSON.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Debug, Args)]
@@ -131,9 +146,17 @@ struct RenderArgs {
     /// [default: renders/<scene>/frame.####.exr]
     #[arg(long)]
     out: Option<String>,
-    /// Rendering method.
+    /// Rendering method [default: auto, each light as the effect plan
+    /// says].
     #[arg(long, value_enum)]
     method: Option<Method>,
+    /// Plan over these frames of the shot instead of the rendered ones
+    /// (they must hold them): every chunk of a farm job plans alike.
+    #[arg(long, value_name = "RANGE")]
+    plan_frames: Option<String>,
+    /// Print the effect plan (as `lmanim plan` does) before rendering.
+    #[arg(long)]
+    explain: bool,
     /// Which hardware renders: `cpu` (default) or `gpu` (wgpu compute).
     #[arg(long, value_enum)]
     backend: Option<BackendKind>,
@@ -257,6 +280,10 @@ fn main() -> ExitCode {
             init_logging(args.quiet);
             run_warm(args)
         }
+        (Some(Command::Plan(args)), _) => {
+            init_logging(args.render.quiet);
+            run_plan(args)
+        }
         (None, Some(render)) => {
             init_logging(render.quiet);
             run(render)
@@ -336,13 +363,16 @@ fn run(cli: &RenderArgs) -> Result<(), Failure> {
     let pattern = FramePattern::parse(&pattern_text)
         .map_err(|fault| Failure::bad_input(anyhow::anyhow!("--out {pattern_text}: {fault}")))?;
 
-    let progress = progress_bar(cli.quiet, frames.len() as u64);
     let job = Job {
         scene_path: &cli.scene,
         settings: &settings,
         frames: &frames,
         pattern: &pattern,
     };
+    if cli.explain {
+        eprint!("{}", plan::report::text(&planned(&job)?));
+    }
+    let progress = progress_bar(cli.quiet, frames.len() as u64);
     let stats = sequence::run(&job, |done| {
         if done.index == 0 && done.automatic_camera {
             progress.suspend(|| {
@@ -425,6 +455,7 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     settings.sheet_columns = flags.sheet_columns.unwrap_or(settings.sheet_columns);
     settings.sheet_every = flags.sheet_every.unwrap_or(settings.sheet_every);
     settings.sheet_frames = flags.sheet_frames.clone().or(settings.sheet_frames);
+    settings.plan_frames = flags.plan_frames.clone().or(settings.plan_frames);
     if let Some(list) = &flags.aovs {
         settings.aovs = Aov::parse_list(list)
             .map_err(|fault| Failure::bad_input(anyhow::anyhow!("--aovs {list}: {fault}")))?;
@@ -456,7 +487,36 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     Ok(settings)
 }
 
-/// `lmanim inspect`: the scene posed at the chosen times, as JSON on stdout.
+/// `lmanim plan`: the effect plan on stdout, as text or JSON.
+fn run_plan(args: &PlanArgs) -> Result<(), Failure> {
+    let cli = &args.render;
+    let settings = resolve_settings(cli)?;
+    let frames = FrameSet::parse(&cli.frames)
+        .map_err(|fault| Failure::bad_input(anyhow::anyhow!("--frames {}: {fault}", cli.frames)))?;
+    let pattern = FramePattern::parse(&default_pattern(&cli.scene))
+        .map_err(|fault| Failure::bad_input(anyhow::anyhow!("{fault}")))?;
+    let job = Job {
+        scene_path: &cli.scene,
+        settings: &settings,
+        frames: &frames,
+        pattern: &pattern,
+    };
+    let plan = planned(&job)?;
+    match args.json {
+        true => println!("{}", plan::report::json(&plan)),
+        false => print!("{}", plan::report::text(&plan)),
+    }
+    Ok(())
+}
+
+/// The effect plan of `job`, its errors as the run's.
+fn planned(job: &Job) -> Result<plan::Plan, Failure> {
+    sequence::plan(job).map_err(|error| Failure {
+        bad_input: error.is_bad_input(),
+        error: error.into(),
+    })
+}
+
 fn run_warm(cli: &RenderArgs) -> Result<(), Failure> {
     let settings = resolve_settings(cli)?;
     let frames = FrameSet::parse(&cli.frames)

@@ -18,9 +18,11 @@ use crate::lightmesh::{LightMesh, LightMeshError};
 use crate::output::{
     self, BackgroundWriter, FrameFiles, FramePattern, OutputError, RenderedFrame, ShotSheet,
 };
+use crate::plan::Plan;
 use crate::render::frame::{CameraChoice, FrameScene, PlaceError, SceneBounds};
+use crate::render::shadow_split::ShadowSplit;
 use crate::render::FrameJob;
-use crate::scene::pose::Pose;
+use crate::scene::pose::{dynamic_nodes, Pose};
 use crate::scene::SceneDesc;
 use crate::schedule::{FrameDelta, FrameSet, Timeline};
 use crate::settings::{Method, Settings};
@@ -51,7 +53,11 @@ pub enum RunError {
     Backend(#[from] BackendError),
     #[error(transparent)]
     Render(RenderError),
-    #[error("warm fills the light mesh's disk cache, and --method {0} has no light mesh (use lmm or lmm1)")]
+    #[error("--plan-frames {planned} does not hold frame {frame}, which the run renders")]
+    PlanFramesMissFrame { planned: String, frame: u32 },
+    #[error("--plan-frames {0}")]
+    PlanFrames(String),
+    #[error("warm fills the light mesh's disk cache, and --method {0} has no light mesh here (use lmm or lmm1, or auto on a scene with lamps that have a radius)")]
     WarmWithoutLightMesh(Method),
     #[error("warm fills the light mesh's disk cache, and --no-cache leaves it none to fill")]
     WarmWithoutCache,
@@ -68,6 +74,8 @@ impl RunError {
                 | RunError::PatternWithoutPlaceholder(_)
                 | RunError::SheetFrames(_)
                 | RunError::WarmWithoutLightMesh(_)
+                | RunError::PlanFramesMissFrame { .. }
+                | RunError::PlanFrames(_)
                 | RunError::WarmWithoutCache
         )
     }
@@ -108,6 +116,13 @@ pub struct Sequence {
     clips: ClipSelection,
     /// The previous frame's placement, to tell what changed.
     previous: Option<FrameScene>,
+    /// Per scene node, whether its object may move: every animated or
+    /// deforming one, or those the plan found moving in its frames.
+    dynamic: Vec<bool>,
+    /// The effect plan the frames follow, if the sequence has one, and
+    /// its per-light shadow classes (by lamp radius without a plan).
+    plan: Option<Plan>,
+    shadows: ShadowSplit,
     /// The previous frame's image (and layers), and whether the frame now
     /// placed is the same picture (nothing changed), so it is copied.
     last_frame: Option<RenderedFrame>,
@@ -124,17 +139,48 @@ impl Sequence {
     /// error messages.
     pub fn new(scene: SceneDesc, scene_file: String) -> Result<Sequence, RunError> {
         let rest = Pose::rest(&scene);
+        let dynamic = dynamic_nodes(&scene);
+        Sequence::build(scene, scene_file, &rest, dynamic, None)
+    }
+
+    /// A sequence that follows `plan`, made for `scene` played by `clips`:
+    /// the objects static within its frames go into the static structures
+    /// where those frames place them (the pose of `first`, its first
+    /// frame, at `first_time` seconds).
+    pub fn planned(
+        scene: SceneDesc,
+        scene_file: String,
+        clips: ClipSelection,
+        first_time: f64,
+        plan: Plan,
+    ) -> Result<Sequence, RunError> {
+        let first = Pose::at(&scene, clips, first_time);
+        let dynamic = plan.dynamic_nodes().to_vec();
+        let mut sequence = Sequence::build(scene, scene_file, &first, dynamic, Some(plan))?;
+        sequence.clips = clips;
+        Ok(sequence)
+    }
+
+    fn build(
+        scene: SceneDesc,
+        scene_file: String,
+        static_pose: &Pose,
+        dynamic: Vec<bool>,
+        plan: Option<Plan>,
+    ) -> Result<Sequence, RunError> {
         // The anchor stays put for the whole sequence, so static geometry is
         // placed (and its BVH built) once.
-        let bounds = SceneBounds::of(&scene, &rest);
-        let anchor = bounds.map_or(glam::DVec3::ZERO, |b| b.centre());
+        let bounds = SceneBounds::of(&scene, &Pose::rest(&scene));
+        let anchor = Plan::anchor(&scene);
         let scene_radius = bounds.map_or(0.0, |b| b.radius() as f32);
+        let choice = CameraChoice::First;
         let placed = FrameScene::place(
             &scene,
-            &rest,
+            static_pose,
             anchor,
-            CameraChoice::First,
+            choice,
             &Default::default(),
+            &dynamic,
         )
         .map_err(|source| RunError::Place {
             file: scene_file.clone(),
@@ -149,9 +195,17 @@ impl Sequence {
             scene_radius,
             clips: ClipSelection::All,
             previous: None,
+            dynamic,
+            shadows: plan.as_ref().map(Plan::shadow_split).unwrap_or_default(),
+            plan,
             last_frame: None,
             still: false,
         })
+    }
+
+    /// The plan the sequence follows, if it has one.
+    pub fn plan(&self) -> Option<&Plan> {
+        self.plan.as_ref()
     }
 
     pub fn scene(&self) -> &SceneDesc {
@@ -209,11 +263,22 @@ impl Sequence {
             None => CameraChoice::First,
         };
         let pose = Pose::at(&self.scene, self.clips, time);
-        let placed = FrameScene::place(&self.scene, &pose, self.anchor, camera, &settings.lamps)
-            .map_err(|source| RunError::Place {
-                file: self.scene_file.clone(),
-                source,
-            })?;
+        let lamps = &settings.lamps;
+        let mut placed = FrameScene::place(
+            &self.scene,
+            &pose,
+            self.anchor,
+            camera,
+            lamps,
+            &self.dynamic,
+        )
+        .map_err(|source| RunError::Place {
+            file: self.scene_file.clone(),
+            source,
+        })?;
+        if let Some(plan) = &self.plan {
+            plan.apply(&mut placed);
+        }
         let delta = match &self.previous {
             Some(previous) => FrameDelta::between(previous, &placed),
             None => FrameDelta::first(&placed),
@@ -259,7 +324,10 @@ impl Sequence {
             return Ok(frame.clone());
         }
         let file = &self.scene_file;
-        let light_mesh = if settings.method.uses_light_mesh() {
+        let light_mesh = if self
+            .shadows
+            .uses_light_mesh(settings.method, &placed.lights)
+        {
             let mesh = &mut self.light_mesh;
             Some(prepared_light_mesh(
                 mesh,
@@ -271,7 +339,7 @@ impl Sequence {
         } else {
             None
         };
-        let job = frame_job(&self.scene, &self.world, placed, settings);
+        let job = frame_job(&self.scene, &self.world, placed, settings, &self.shadows);
         let frame = (backend.render(&job, settings.method, light_mesh, stats))
             .map_err(|error| run_error(file, error))?;
         if let Some(mesh_stats) = &mut stats.lightmesh {
@@ -293,7 +361,7 @@ impl Sequence {
         let file = &self.scene_file;
         let mesh = &mut self.light_mesh;
         let mesh = prepared_light_mesh(mesh, file, self.scene_radius, placed, settings)?;
-        let job = frame_job(&self.scene, &self.world, placed, settings);
+        let job = frame_job(&self.scene, &self.world, placed, settings, &self.shadows);
         (backend.warm(&job, mesh, stats)).map_err(|error| run_error(file, error))?;
         if let Some(mesh_stats) = &mut stats.lightmesh {
             mesh_stats.bits_loaded = self.light_mesh.take_bits_loaded();
@@ -311,7 +379,7 @@ impl Sequence {
         settings: &Settings,
         stats: &mut FrameStats,
     ) -> output::Image {
-        let job = frame_job(&self.scene, &self.world, placed, settings);
+        let job = frame_job(&self.scene, &self.world, placed, settings, &self.shadows);
         cpu.render_unshadowed(&job, stats)
     }
 }
@@ -344,7 +412,9 @@ fn run_error(file: &str, error: RenderError) -> RunError {
             source,
         },
         RenderError::Gpu(error) => RunError::Backend(error.into()),
-        error @ RenderError::NoLightMesh(_) => RunError::Render(error),
+        error @ (RenderError::NoLightMesh(_) | RenderError::MixedAutoOnGpu) => {
+            RunError::Render(error)
+        }
     }
 }
 
@@ -353,6 +423,7 @@ fn frame_job<'a>(
     world: &'a World,
     placed: &'a FrameScene,
     settings: &'a Settings,
+    shadows: &'a ShadowSplit,
 ) -> FrameJob<'a> {
     FrameJob {
         scene,
@@ -364,6 +435,7 @@ fn frame_job<'a>(
         max_depth: settings.max_depth,
         environment: settings.environment(),
         aovs: &settings.aovs,
+        shadows,
     }
 }
 
@@ -380,23 +452,55 @@ fn shot_sheet(path: &Path, settings: &Settings, frames: &FrameSet) -> Result<Sho
     Ok(ShotSheet::new(path, sheet_frames.frames(), columns, every))
 }
 
-/// The backend and the loaded scene `job` runs on, with its disk cache and
-/// clips set.
+/// The backend and the loaded scene `job` runs on, following its plan,
+/// with its disk cache and clips set.
 fn open(job: &Job) -> Result<(Backend, Sequence), RunError> {
     let settings = job.settings;
     let mut backend = Backend::new(settings.backend, settings.threads)?;
     backend.limit_mask_memory(settings.lightmesh.gpu_memory_mib.saturating_mul(1 << 20));
-    let mut sequence = Sequence::load(job.scene_path)?;
+    let (scene, clips, plan) = load_planned(job)?;
+    let first_time = Timeline { fps: settings.fps }.time_of(plan.frames.frames()[0]);
+    let file = job.scene_path.display().to_string();
+    let mut sequence = Sequence::planned(scene, file, clips, first_time, plan)?;
     sequence.set_cache_dir(settings.cache_dir.as_ref().map(PathBuf::from));
-    if let Some(clip) = &settings.clip {
-        let clips =
-            ClipSelection::parse(sequence.scene(), clip).map_err(|fault| RunError::Clip {
-                file: job.scene_path.display().to_string(),
-                fault,
-            })?;
-        sequence.set_clips(clips);
-    }
     Ok((backend, sequence))
+}
+
+/// The effect plan of `job` (`lmanim plan`, `--explain`).
+pub fn plan(job: &Job) -> Result<Plan, RunError> {
+    Ok(load_planned(job)?.2)
+}
+
+/// `job`'s scene, the clips it plays and its plan, over `--plan-frames`
+/// (which must hold the run's frames) or else the run's frames.
+fn load_planned(job: &Job) -> Result<(SceneDesc, ClipSelection, Plan), RunError> {
+    let settings = job.settings;
+    let scene = import::load(job.scene_path)?;
+    let file = job.scene_path.display().to_string();
+    let clips = match &settings.clip {
+        Some(clip) => ClipSelection::parse(&scene, clip).map_err(|fault| RunError::Clip {
+            file: file.clone(),
+            fault,
+        })?,
+        None => ClipSelection::All,
+    };
+    let planned = match &settings.plan_frames {
+        Some(text) => {
+            FrameSet::parse(text).map_err(|fault| RunError::PlanFrames(fault.to_string()))?
+        }
+        None => job.frames.clone(),
+    };
+    if let Some(&frame) =
+        (job.frames.frames().iter()).find(|f| planned.frames().binary_search(f).is_err())
+    {
+        return Err(RunError::PlanFramesMissFrame {
+            planned: settings.plan_frames.clone().unwrap_or_default(),
+            frame,
+        });
+    }
+    let plan = Plan::make(&scene, settings, clips, &planned)
+        .map_err(|source| RunError::Place { file, source })?;
+    Ok((scene, clips, plan))
 }
 
 /// What warming the disk cache did (`lmanim warm`).
@@ -417,13 +521,13 @@ pub struct WarmStats {
 pub fn warm(job: &Job) -> Result<WarmStats, RunError> {
     let started = Instant::now();
     let settings = job.settings;
-    if !settings.method.uses_light_mesh() {
-        return Err(RunError::WarmWithoutLightMesh(settings.method));
-    }
     if settings.cache_dir.is_none() {
         return Err(RunError::WarmWithoutCache);
     }
     let (mut backend, mut sequence) = open(job)?;
+    if !sequence.shadows.uses_light_mesh(settings.method, &[]) {
+        return Err(RunError::WarmWithoutLightMesh(settings.method));
+    }
     let timeline = Timeline { fps: settings.fps };
     let mut warm = WarmStats::default();
     for &frame in job.frames.frames() {

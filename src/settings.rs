@@ -77,6 +77,10 @@ pub struct Settings {
     /// `0..240`); those the run does not render are read back from their
     /// EXR files. None: the run's frames.
     pub sheet_frames: Option<String>,
+    /// The frames of the shot the effect plan is made over (a frame range
+    /// such as `0..240`), so that every chunk a farm renders plans alike;
+    /// it must hold the run's frames. None: the run's frames.
+    pub plan_frames: Option<String>,
     /// Linear RGB radiance of the pixels where camera rays meet nothing,
     /// which makes frames opaque; None leaves them transparent black.
     pub background: Option<[f32; 3]>,
@@ -105,7 +109,7 @@ impl Default for Settings {
             width: 640,
             height: 360,
             fps: 24.0,
-            method: Method::Whitted,
+            method: Method::Auto,
             backend: BackendKind::Cpu,
             spp: 1,
             max_depth: 5,
@@ -119,6 +123,7 @@ impl Default for Settings {
             sheet_columns: 6,
             sheet_every: 1,
             sheet_frames: None,
+            plan_frames: None,
             background: None,
             ambient: None,
             aovs: Vec::new(),
@@ -137,8 +142,13 @@ impl Default for Settings {
 )]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
-    /// Hard shadows with one shadow ray per light: the reference.
+    /// Each light as the effect plan says (`src/plan/`): shadow rays for
+    /// lights without a lamp radius, LMM1 for lamps with one, no shadow
+    /// ray where nothing can cast a shadow, nothing for lights that reach
+    /// nothing in view.
     #[default]
+    Auto,
+    /// Hard shadows with one shadow ray per light: the reference.
     Whitted,
     /// Light Meshes Method with point-to-node visibility tests.
     Lmm,
@@ -151,6 +161,7 @@ pub enum Method {
 impl Method {
     /// Whether frames shade from a light mesh (LMM, LMM1), which the
     /// sequence makes on the first frame and keeps for the next ones.
+    /// (`auto` does for its soft lights: see `ShadowSplit::uses_light_mesh`.)
     pub fn uses_light_mesh(self) -> bool {
         matches!(self, Method::Lmm | Method::Lmm1)
     }
@@ -165,6 +176,7 @@ impl Method {
 impl std::fmt::Display for Method {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
+            Method::Auto => "auto",
             Method::Whitted => "whitted",
             Method::Lmm => "lmm",
             Method::Lmm1 => "lmm1",
@@ -422,6 +434,9 @@ impl Settings {
         }
         if let Some(Err(fault)) = self.sheet_frames.as_deref().map(FrameSet::parse) {
             return Err(format!("sheet_frames: {fault}"));
+        }
+        if let Some(Err(fault)) = self.plan_frames.as_deref().map(FrameSet::parse) {
+            return Err(format!("plan_frames: {fault}"));
         }
         if self.sheet_every == 0 {
             return Err("sheet_every is 0; it must be at least 1".into());

@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use crate::lightmesh::LightMeshStats;
+use crate::plan::Shadows;
 
 /// Rays traced in one frame, by kind.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -23,6 +24,80 @@ impl std::ops::AddAssign for RayCounts {
     }
 }
 
+/// Shadow rays traced for lights of each shadow class of the plan.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ClassRays([u64; 4]);
+
+impl ClassRays {
+    pub fn add(&mut self, class: Shadows) {
+        self.0[class as usize] += 1;
+    }
+
+    pub fn of(&self, class: Shadows) -> u64 {
+        self.0[class as usize]
+    }
+
+    pub fn total(&self) -> u64 {
+        self.0.iter().sum()
+    }
+}
+
+impl std::ops::AddAssign for ClassRays {
+    fn add_assign(&mut self, other: ClassRays) {
+        for (mine, theirs) in self.0.iter_mut().zip(other.0) {
+            *mine += theirs;
+        }
+    }
+}
+
+/// What a frame spent on the lights of one shadow class.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct ClassCost {
+    /// Shadow rays of formula (1) (hard lights, formula (2)'s fallback)
+    /// and lamp samples (`area`) for these lights.
+    pub shadow_rays: u64,
+    /// (node, light) mask bits the light mesh holds for these lights
+    /// after the frame.
+    pub mask_bits: u64,
+}
+
+/// A frame's cost by the plan's shadow class of the lights it served, so
+/// that what the plan skips can be seen to cost nothing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct ShadowClassCosts {
+    pub none: ClassCost,
+    pub unshadowed: ClassCost,
+    pub hard: ClassCost,
+    pub soft: ClassCost,
+}
+
+impl ShadowClassCosts {
+    pub fn get(&self, class: Shadows) -> ClassCost {
+        match class {
+            Shadows::None => self.none,
+            Shadows::Unshadowed => self.unshadowed,
+            Shadows::Hard => self.hard,
+            Shadows::Soft => self.soft,
+        }
+    }
+
+    pub fn get_mut(&mut self, class: Shadows) -> &mut ClassCost {
+        match class {
+            Shadows::None => &mut self.none,
+            Shadows::Unshadowed => &mut self.unshadowed,
+            Shadows::Hard => &mut self.hard,
+            Shadows::Soft => &mut self.soft,
+        }
+    }
+
+    /// Adds `rays`, class by class.
+    pub fn add_rays(&mut self, rays: ClassRays) {
+        for class in Shadows::ALL {
+            self.get_mut(class).shadow_rays += rays.of(class);
+        }
+    }
+}
+
 /// What one frame cost.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct FrameStats {
@@ -31,6 +106,8 @@ pub struct FrameStats {
     /// Wall time of each stage of the frame, by stage name.
     pub stages: BTreeMap<String, f64>,
     pub rays: RayCounts,
+    /// Shadow rays and mask bits by the plan's class of their light.
+    pub shadow_classes: ShadowClassCosts,
     pub shading_points: u64,
     /// What changed since the previous rendered frame.
     pub camera_moved: bool,

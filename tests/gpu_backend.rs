@@ -757,6 +757,7 @@ fn shading_points_made_on_the_gpu_are_the_cpus() {
                 max_depth: settings.max_depth,
                 environment: settings.environment(),
                 aovs: &[],
+                shadows: &Default::default(),
             };
             let gpu_points = gpu.shading_points(&job, &rays).expect("GPU points");
             let mut hits = 0;

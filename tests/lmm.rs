@@ -445,6 +445,7 @@ fn a_light_mesh_method_without_a_light_mesh_is_an_error_not_a_panic() {
         max_depth: settings.max_depth,
         environment: settings.environment(),
         aovs: &[],
+        shadows: &Default::default(),
     };
     let backend = lmanim::backend::CpuBackend::new(Some(1)).unwrap();
     for method in [Method::Lmm, Method::Lmm1] {

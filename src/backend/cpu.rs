@@ -24,10 +24,12 @@ use crate::accel::Ray;
 use crate::lightmesh::interpolate::{PointCounts, Scratch};
 use crate::lightmesh::{LightMesh, LightMeshStats};
 use crate::output::{Image, RenderedFrame};
+use crate::plan::Shadows;
 use crate::render::environment::Environment;
 use crate::render::light_terms::{PointTerms, TermLog};
 use crate::render::omega::LightLanes;
 use crate::render::scatter::secondary_rays;
+use crate::render::shadow_split::LightRole;
 use crate::render::surface::ShadingPoint;
 use crate::render::{area, whitted, FrameJob};
 use crate::settings::Method;
@@ -95,7 +97,12 @@ impl CpuBackend {
             counts += band_counts;
             Ok::<_, RenderError>((shaded, terms))
         })?;
-        if let (true, Some(mesh)) = (method.uses_light_mesh(), light_mesh) {
+        let lights = &job.frame.lights;
+        if let (true, Some(mesh)) = (job.shadows.uses_light_mesh(method, lights), light_mesh) {
+            for class in Shadows::ALL {
+                let words = job.shadows.class_words(class, lights);
+                stats.shadow_classes.get_mut(class).mask_bits = mesh.masks().known_bits_of(&words);
+            }
             stats.lightmesh = Some(mesh.frame_stats(lightmesh, counts, stats.shading_points));
         }
         Ok(frame)
@@ -237,9 +244,10 @@ fn hits(
     (points, primary_count)
 }
 
-/// The shading stages of one band by `method` (for the light-mesh methods
-/// demand and fill first): each point's value, the light terms kept as
-/// `T` keeps them, and what shading cost.
+/// The shading stages of one band by `method` and the plan's shadow
+/// classes (for the lights shaded from the light mesh, demand and fill
+/// first): each point's value, the light terms kept as `T` keeps them,
+/// and what shading cost.
 #[allow(clippy::too_many_arguments)]
 fn shade_by_method<T: PointTerms>(
     job: &FrameJob,
@@ -252,18 +260,18 @@ fn shade_by_method<T: PointTerms>(
     lightmesh: &mut LightMeshStats,
 ) -> Result<(Vec<Vec3>, Vec<T>, PointCounts), RenderError> {
     let lights = &job.frame.lights;
+    let shadows = job.shadows;
     let segments_before = lightmesh.fill_segments;
+    let formula_one = || {
+        shadows.lanes(method, lights, |role| {
+            matches!(role, LightRole::FormulaOne { .. })
+        })
+    };
     let (shaded, terms, band_counts) = match (method, light_mesh) {
-        (Method::Whitted, _) => shade_stage(
-            points,
-            &job.environment,
-            stats,
-            || (),
-            |_, _, point, terms: &mut T| {
-                let shadow_rays = whitted::direct_light_terms(point, lanes, job.world, terms);
-                PointCounts::shadow_rays(shadow_rays)
-            },
-        ),
+        (Method::Whitted, _) => formula_one_stage(job, points, lanes, stats),
+        (Method::Auto, _) if !shadows.uses_light_mesh(method, lights) => {
+            formula_one_stage(job, points, &formula_one(), stats)
+        }
         (Method::Area, _) => {
             // Lamp samples are seeded by the sample's index in the whole
             // image; `point.sample` counts from the band's first row.
@@ -276,55 +284,124 @@ fn shade_by_method<T: PointTerms>(
                 |_, _, point, terms: &mut T| {
                     let sample = band_start + point.sample as u64;
                     let lamp = |light| lamp_sample(sample, job.spp, light, point.depth);
-                    let shadow_rays = area::direct_light(point, lights, job.world, lamp, terms);
-                    PointCounts::shadow_rays(shadow_rays)
+                    let rays = area::direct_light(point, lights, job.world, lamp, shadows, terms);
+                    PointCounts::shadow_rays(rays)
                 },
             )
         }
         (Method::Lmm | Method::Lmm1, Some(mesh)) => {
-            let start = Instant::now();
-            lightmesh.points_demanded += points.len() as u64;
-            let demand = mesh.demand(points, lanes)?;
-            stats.add_stage_time("demand", start.elapsed().as_secs_f64());
-
-            let start = Instant::now();
-            mesh.fill(&demand, lights, job.world, lightmesh)?;
-            stats.add_stage_time("fill", start.elapsed().as_secs_f64());
-
-            if !method.tests_point_to_node() {
-                let start = Instant::now();
-                lightmesh.nodes_probed += mesh.settle_enclosure(&demand, job.world);
-                stats.add_stage_time("enclosure", start.elapsed().as_secs_f64());
-            }
-
-            let mesh = &*mesh;
-            let point_to_node_tests = method.tests_point_to_node();
-            let scratch = || Scratch::new(mesh);
-            shade_stage(
-                points,
-                &job.environment,
-                stats,
-                scratch,
-                |scratch, index, point, terms: &mut T| {
-                    mesh.shade(
-                        point,
-                        demand.reach_of(index),
-                        lanes,
-                        job.world,
-                        point_to_node_tests,
-                        scratch,
-                        terms,
-                    )
-                },
-            )
+            let mesh_stage = MeshStage {
+                lanes,
+                point_to_node_tests: method.tests_point_to_node(),
+                formula_one_first: None,
+            };
+            mesh_stage.shade(job, points, mesh, stats, lightmesh)?
         }
-        (Method::Lmm | Method::Lmm1, None) => return Err(RenderError::NoLightMesh(method)),
+        (Method::Auto, Some(mesh)) => {
+            let formula_one = shadows.uses_formula_one(method, lights).then(formula_one);
+            let mesh_lanes = shadows.lanes(method, lights, |role| role == LightRole::LightMesh);
+            let mesh_stage = MeshStage {
+                lanes: &mesh_lanes,
+                point_to_node_tests: false,
+                formula_one_first: formula_one.as_ref(),
+            };
+            mesh_stage.shade(job, points, mesh, stats, lightmesh)?
+        }
+        (Method::Lmm | Method::Lmm1 | Method::Auto, None) => {
+            return Err(RenderError::NoLightMesh(method))
+        }
     };
+    stats.shadow_classes.add_rays(band_counts.shadow_rays);
     // Every occlusion segment is a shadow ray: formula (1)'s, the fill's
     // node-to-light ones and LMM's point-to-node tests.
     stats.rays.shadow +=
-        band_counts.shadow_rays + band_counts.p2n_tests + lightmesh.fill_segments - segments_before;
+        band_counts.shadow_rays.total() + band_counts.p2n_tests + lightmesh.fill_segments
+            - segments_before;
     Ok((shaded, terms, band_counts))
+}
+
+/// Formula (1) at every point, for the lights `lanes` hold powered.
+fn formula_one_stage<T: PointTerms>(
+    job: &FrameJob,
+    points: &[ShadingPoint],
+    lanes: &LightLanes,
+    stats: &mut FrameStats,
+) -> (Vec<Vec3>, Vec<T>, PointCounts) {
+    shade_stage(
+        points,
+        &job.environment,
+        stats,
+        || (),
+        |_, _, point, terms: &mut T| {
+            let rays = whitted::direct_light_terms(point, lanes, job.world, job.shadows, terms);
+            PointCounts::shadow_rays(rays)
+        },
+    )
+}
+
+/// The light-mesh stages (demand, fill, LMM1's enclosure, formula (2))
+/// for the lights `lanes` hold powered; with `formula_one_first`, each
+/// point first gets formula (1)'s terms of the lights those lanes hold
+/// (`auto`'s hard and unshadowed lights), so a point's terms are summed
+/// in one fixed order.
+struct MeshStage<'l> {
+    lanes: &'l LightLanes,
+    point_to_node_tests: bool,
+    formula_one_first: Option<&'l LightLanes>,
+}
+
+impl MeshStage<'_> {
+    fn shade<T: PointTerms>(
+        &self,
+        job: &FrameJob,
+        points: &[ShadingPoint],
+        mesh: &mut LightMesh,
+        stats: &mut FrameStats,
+        lightmesh: &mut LightMeshStats,
+    ) -> Result<(Vec<Vec3>, Vec<T>, PointCounts), RenderError> {
+        let lights = &job.frame.lights;
+        let start = Instant::now();
+        lightmesh.points_demanded += points.len() as u64;
+        let demand = mesh.demand(points, self.lanes)?;
+        stats.add_stage_time("demand", start.elapsed().as_secs_f64());
+
+        let start = Instant::now();
+        mesh.fill(&demand, lights, job.world, lightmesh)?;
+        stats.add_stage_time("fill", start.elapsed().as_secs_f64());
+
+        if !self.point_to_node_tests {
+            let start = Instant::now();
+            lightmesh.nodes_probed += mesh.settle_enclosure(&demand, job.world);
+            stats.add_stage_time("enclosure", start.elapsed().as_secs_f64());
+        }
+
+        let mesh = &*mesh;
+        let scratch = || Scratch::new(mesh);
+        Ok(shade_stage(
+            points,
+            &job.environment,
+            stats,
+            scratch,
+            |scratch, index, point, terms: &mut T| {
+                let mut counts = PointCounts::default();
+                if let Some(lanes) = self.formula_one_first {
+                    counts.shadow_rays =
+                        whitted::direct_light_terms(point, lanes, job.world, job.shadows, terms);
+                }
+                counts += mesh.shade(
+                    point,
+                    demand.reach_of(index),
+                    self.lanes,
+                    job.world,
+                    self.point_to_node_tests,
+                    job.shadows,
+                    scratch,
+                    terms,
+                );
+                counts
+            },
+        ))
+    }
 }
 
 /// Shading points per work item of the shade stage, and per `T` of the

@@ -44,6 +44,10 @@ pub enum RenderError {
     /// from: the caller's mistake, never the scene's.
     #[error("--method {0} shades from a light mesh, and the frame came without one")]
     NoLightMesh(Method),
+    /// `auto` on the GPU with lights for both formula (1) and the light
+    /// mesh in one frame, which its passes cannot shade together yet.
+    #[error("--backend gpu renders --method auto only when the plan shades every light alike (all by shadow rays, or all from the light mesh); this scene has both hard and soft lights: use --backend cpu, or force --method whitted, lmm or lmm1")]
+    MixedAutoOnGpu,
     #[error(transparent)]
     Gpu(#[from] GpuError),
 }

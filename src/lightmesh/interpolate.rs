@@ -20,8 +20,10 @@ use crate::accel::{Ray, World};
 use crate::bits::set_bits;
 use crate::render::light_terms::LightTerms;
 use crate::render::omega::{LightLanes, PointLanes, LANES};
+use crate::render::shadow_split::ShadowSplit;
 use crate::render::surface::ShadingPoint;
 use crate::render::whitted;
+use crate::stats::ClassRays;
 
 /// What shading one point cost, summed into the frame's statistics.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -30,12 +32,13 @@ pub struct PointCounts {
     pub interp_set: u64,
     pub p2n_tests: u64,
     pub fallback: u64,
-    pub shadow_rays: u64,
+    /// Plain shadow rays (formula (1), lamp samples), by light class.
+    pub shadow_rays: ClassRays,
 }
 
 impl PointCounts {
     /// The counts of a point shaded with `rays` plain shadow rays.
-    pub fn shadow_rays(rays: u64) -> PointCounts {
+    pub fn shadow_rays(rays: ClassRays) -> PointCounts {
         PointCounts {
             shadow_rays: rays,
             ..PointCounts::default()
@@ -116,6 +119,7 @@ impl LightMesh {
         lights: &LightLanes,
         world: &World,
         point_to_node_tests: bool,
+        shadows: &ShadowSplit,
         scratch: &mut Scratch,
         terms: &mut impl LightTerms,
     ) -> PointCounts {
@@ -163,7 +167,7 @@ impl LightMesh {
         let total: u32 = weights.iter().sum();
         if total == 0 {
             counts.fallback = 1;
-            counts.shadow_rays = whitted::direct_light_terms(point, lights, world, terms);
+            counts.shadow_rays = whitted::direct_light_terms(point, lights, world, shadows, terms);
             return counts;
         }
 

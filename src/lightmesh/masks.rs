@@ -394,6 +394,26 @@ impl MaskStore {
             .sum()
     }
 
+    /// (node, light) pairs whose visibility is known for the lights whose
+    /// bits `lights` sets (64 lights a word, as the masks hold them).
+    pub fn known_bits_of(&self, lights: &[u64]) -> u64 {
+        use rayon::prelude::*;
+        let stride = GROUPS * self.words;
+        self.bricks
+            .par_iter()
+            .flat_map_iter(|(_, stored)| stored.nodes.chunks(stride))
+            .map(|node| {
+                let mask = NodeMask {
+                    bits: node,
+                    words: self.words,
+                };
+                (lights.iter().enumerate().take(self.words))
+                    .map(|(word, &wanted)| (mask.valid(word) & wanted).count_ones() as u64)
+                    .sum::<u64>()
+            })
+            .sum()
+    }
+
     /// Nodes with at least one valid bit.
     pub fn nodes_cached(&self) -> usize {
         self.nodes

@@ -187,8 +187,15 @@ mod tests {
         };
         let rest = Pose::rest(&scene);
         let choice = CameraChoice::First;
-        let placed =
-            FrameScene::place(&scene, &rest, DVec3::ZERO, choice, &Default::default()).unwrap();
+        let placed = FrameScene::place(
+            &scene,
+            &rest,
+            DVec3::ZERO,
+            choice,
+            &Default::default(),
+            &crate::scene::pose::dynamic_nodes(&scene),
+        )
+        .unwrap();
         PersistentLightMesh::new(&scene, &placed)
     }
 

@@ -22,25 +22,28 @@ use glam::{Vec2, Vec3};
 
 use super::light::RenderLight;
 use super::light_terms::LightTerms;
+use super::shadow_split::ShadowSplit;
 use super::surface::ShadingPoint;
 use crate::accel::offset::offset_ray_origin;
 use crate::accel::{Ray, World};
+use crate::stats::ClassRays;
 
 /// Direct light at `point` from every light, spherical lamps sampled once
 /// each, light by light into `terms`; `lamp_sample(i)` is the point of the
 /// unit square that light `i`'s sample comes from (stratified over the
-/// pixel's samples by the backend). Returns how many shadow rays it
-/// traced.
+/// pixel's samples by the backend). Returns the shadow rays it traced,
+/// by the class `shadows` gives their light.
 pub fn direct_light(
     point: &ShadingPoint,
     lights: &[RenderLight],
     world: &World,
     lamp_sample: impl Fn(u32) -> Vec2,
+    shadows: &ShadowSplit,
     terms: &mut impl LightTerms,
-) -> u64 {
-    let mut shadow_rays = 0;
+) -> ClassRays {
+    let mut shadow_rays = ClassRays::default();
     light_samples(point, lights, lamp_sample, |light, sample| {
-        shadow_rays += 1;
+        shadow_rays.add(shadows.class(light, lights));
         if !world.occluded(&sample.shadow_ray) {
             terms.add(light, sample.value);
         }

@@ -13,7 +13,9 @@ use super::camera::RenderCamera;
 use super::light::RenderLight;
 use crate::accel::{World, WorldObject};
 use crate::anim::deform::{deformed_mesh, DeformedMesh};
-use crate::scene::pose::{dynamic_nodes, Pose};
+#[cfg(doc)]
+use crate::scene::pose::dynamic_nodes;
+use crate::scene::pose::Pose;
 use crate::scene::{Light, Material, Projection, SceneDesc};
 use crate::settings::LampSettings;
 
@@ -115,15 +117,17 @@ impl FrameScene {
         World::build(&objects)
     }
 
-    /// Places `scene` at `pose` relative to `anchor`.
+    /// Places `scene` at `pose` relative to `anchor`; `dynamic` says per
+    /// node whether its object may move (see [`dynamic_nodes`], or a
+    /// plan's narrower set over the frames it renders).
     pub fn place(
         scene: &SceneDesc,
         pose: &Pose,
         anchor: DVec3,
         camera: CameraChoice,
         lamps: &LampSettings,
+        dynamic: &[bool],
     ) -> Result<FrameScene, PlaceError> {
-        let dynamic = dynamic_nodes(scene);
         let relative = DMat4::from_translation(-anchor);
         let objects: Vec<PlacedObject> = scene
             .nodes

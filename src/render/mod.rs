@@ -14,6 +14,7 @@ pub mod material;
 pub mod omega;
 pub mod scatter;
 pub mod shading;
+pub mod shadow_split;
 pub mod surface;
 pub mod whitted;
 
@@ -22,6 +23,7 @@ use crate::scene::SceneDesc;
 use crate::settings::Aov;
 use environment::Environment;
 use frame::FrameScene;
+use shadow_split::ShadowSplit;
 
 /// Everything a backend needs to render one frame.
 #[derive(Clone, Copy)]
@@ -40,4 +42,7 @@ pub struct FrameJob<'a> {
     pub environment: Environment,
     /// The AOV layers to make beside the beauty.
     pub aovs: &'a [Aov],
+    /// The plan's shadow class of each light, which with the method
+    /// decides how each is shaded.
+    pub shadows: &'a ShadowSplit,
 }

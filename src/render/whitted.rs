@@ -7,32 +7,41 @@ use glam::Vec3;
 
 use super::light_terms::LightTerms;
 use super::omega::{LightLanes, PointLanes, LANES};
+use super::shadow_split::ShadowSplit;
 use super::surface::ShadingPoint;
 use crate::accel::{Ray, World};
 use crate::bits::set_bits;
+use crate::stats::ClassRays;
 
-/// Direct light at `point` by formula (1); also returns how many shadow
-/// rays it traced (none for lights that cannot reach the point anyway).
+/// Direct light at `point` by formula (1), every light's segment tested;
+/// also returns how many shadow rays it traced (none for lights that
+/// cannot reach the point anyway).
 pub fn direct_light(point: &ShadingPoint, lights: &LightLanes, world: &World) -> (Vec3, u64) {
     let mut radiance = Vec3::ZERO;
-    let shadow_rays = direct_light_terms(point, lights, world, &mut radiance);
-    (radiance, shadow_rays)
+    let split = ShadowSplit::default();
+    let shadow_rays = direct_light_terms(point, lights, world, &split, &mut radiance);
+    (radiance, shadow_rays.total())
 }
 
 /// Formula (1)'s visible terms at `point`, light by light into `terms`;
-/// returns how many shadow rays it traced.
+/// returns the shadow rays it traced, by class. The segments of lights
+/// `shadows` calls unshadowed are not traced: nothing can block them.
 pub fn direct_light_terms(
     point: &ShadingPoint,
     lights: &LightLanes,
     world: &World,
+    shadows: &ShadowSplit,
     terms: &mut impl LightTerms,
-) -> u64 {
-    let mut shadow_rays = 0;
+) -> ClassRays {
+    let mut shadow_rays = ClassRays::default();
     light_terms(point, lights, |light, omega, shadow_ray| {
-        shadow_rays += 1;
-        if !world.occluded(&shadow_ray) {
-            terms.add(light, omega);
+        if shadows.tests_segment(light) {
+            shadow_rays.add(shadows.class(light, lights.lights()));
+            if world.occluded(&shadow_ray) {
+                return;
+            }
         }
+        terms.add(light, omega);
     });
     shadow_rays
 }

@@ -28,6 +28,7 @@ pub enum PlotError {
 /// Each method's colour, the same in both pictures.
 fn colour(method: Method) -> RGBColor {
     match method {
+        Method::Auto => RGBColor(148, 103, 189),
         Method::Whitted => RGBColor(90, 90, 90),
         Method::Lmm => RGBColor(31, 119, 180),
         Method::Lmm1 => RGBColor(44, 160, 44),

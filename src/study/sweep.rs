@@ -68,7 +68,7 @@ pub fn plan(methods: &[Method], lamp_radius: f32, default_ki: f32) -> Vec<RunSpe
     let mut runs = Vec::new();
     for &method in methods {
         match method {
-            Method::Whitted => runs.push(RunSpec {
+            Method::Whitted | Method::Auto => runs.push(RunSpec {
                 method,
                 h: None,
                 ki: None,

@@ -229,10 +229,11 @@ impl GpuBackend {
         }
     }
 
-    /// Renders one frame by `method`, with the AOV layers `job` asks for;
-    /// stage times, ray and point counts go to `stats`. The light-mesh
-    /// methods shade from `light_mesh` (an error without one), whose masks
-    /// the backend keeps resident.
+    /// Renders one frame by `method` (`auto` as [`gpu_method`] resolves
+    /// it), with the AOV layers `job` asks for; stage times, ray and point
+    /// counts go to `stats`. The light-mesh methods shade from
+    /// `light_mesh` (an error without one), whose masks the backend keeps
+    /// resident.
     pub fn render(
         &mut self,
         job: &FrameJob,
@@ -250,6 +251,7 @@ impl GpuBackend {
             Some(pool) => pool,
             None => MaskPool::new(&self.context, self.mask_memory)?,
         };
+        let method = gpu_method(job, method)?;
         let mut direct = match (method, light_mesh) {
             (Method::Whitted, _) => DirectMethod::Whitted,
             (Method::Area, _) => DirectMethod::Area,
@@ -262,7 +264,10 @@ impl GpuBackend {
                     job,
                 )?))
             }
-            (Method::Lmm | Method::Lmm1, None) => return Err(RenderError::NoLightMesh(method)),
+            (Method::Lmm | Method::Lmm1 | Method::Auto, None) => {
+                return Err(RenderError::NoLightMesh(method))
+            }
+            (Method::Auto, Some(_)) => unreachable!("gpu_method resolves auto"),
         };
         let frame = self.frame(job, lights);
         stats.add_stage_time("upload", start.elapsed().as_secs_f64());
@@ -324,4 +329,24 @@ pub struct GpuPasses<'a> {
     pub direct: &'a DirectLightPass,
     pub fill: &'a FillPass,
     pub scene: &'a GpuScene,
+}
+
+/// The one integrator the GPU runs a frame by: `auto` becomes `whitted`
+/// where the plan shades every light by formula (1) (`none` lights are
+/// off either way; unshadowed ones' segments, traced, are clear) and
+/// `lmm1` where it shades them all from the light mesh. A frame that
+/// needs both is refused: the GPU's passes shade a level by one method.
+fn gpu_method(job: &FrameJob, method: Method) -> Result<Method, RenderError> {
+    if method != Method::Auto {
+        return Ok(method);
+    }
+    let (shadows, lights) = (job.shadows, &job.frame.lights);
+    match (
+        shadows.uses_formula_one(method, lights),
+        shadows.uses_light_mesh(method, lights),
+    ) {
+        (true, true) => Err(RenderError::MixedAutoOnGpu),
+        (_, false) => Ok(Method::Whitted),
+        (false, true) => Ok(Method::Lmm1),
+    }
 }

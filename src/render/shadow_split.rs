@@ -1,0 +1,136 @@
+//! Which integrator shades each light of a frame: the plan's class of the
+//! light ([`Shadows`]) and the run's method decide it together. `auto`
+//! follows the class (formula (1) with shadow rays for hard lights, with
+//! none for unshadowed ones, the light mesh by LMM1 for soft ones); the
+//! other methods force their integrator on every light, except that a
+//! `none` light is off everywhere and no formula-(1) term of an
+//! unshadowed light tests its segment (it would be clear).
+//!
+//! One frame may so use two integrators. Each light's term is computed by
+//! its own, and a point's terms are summed in a fixed order (the
+//! formula-(1) lights first, in light order, then the light mesh's), so a
+//! light's term has the bits the forced method gives it.
+
+use glam::Vec3;
+
+use super::light::RenderLight;
+use super::omega::LightLanes;
+use crate::plan::Shadows;
+use crate::settings::Method;
+
+/// How one light is shaded in a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightRole {
+    /// Switched off: it reaches nothing the camera sees.
+    Off,
+    /// Formula (1); `test_segment` is false for unshadowed lights.
+    FormulaOne { test_segment: bool },
+    /// Formula (2) from the light mesh.
+    LightMesh,
+    /// Monte Carlo samples of the spherical lamp (`area`).
+    Lamp,
+}
+
+/// The frame's lights' shadow classes. The default (no plan) takes every
+/// light as `hard` or `soft` by its lamp radius at the time of asking.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ShadowSplit {
+    classes: Vec<Shadows>,
+}
+
+impl ShadowSplit {
+    pub fn new(classes: Vec<Shadows>) -> ShadowSplit {
+        ShadowSplit { classes }
+    }
+
+    /// The class of light `index` of `lights`.
+    pub fn class(&self, index: usize, lights: &[RenderLight]) -> Shadows {
+        match self.classes.get(index) {
+            Some(&class) => class,
+            None => Shadows::by_lamp_radius(lights.get(index).map_or(0.0, |l| l.lamp_radius)),
+        }
+    }
+
+    /// Whether a formula-(1) term of light `index` tests its shadow
+    /// segment: all but unshadowed lights'.
+    pub fn tests_segment(&self, index: usize) -> bool {
+        self.classes.get(index) != Some(&Shadows::Unshadowed)
+    }
+
+    /// How `method` shades light `index` of `lights`.
+    pub fn role(&self, method: Method, index: usize, lights: &[RenderLight]) -> LightRole {
+        let class = self.class(index, lights);
+        let test_segment = class != Shadows::Unshadowed;
+        match (class, method) {
+            (Shadows::None, _) => LightRole::Off,
+            (_, Method::Lmm | Method::Lmm1) => LightRole::LightMesh,
+            (_, Method::Area) => LightRole::Lamp,
+            (Shadows::Soft, Method::Auto) => LightRole::LightMesh,
+            (_, Method::Auto | Method::Whitted) => LightRole::FormulaOne { test_segment },
+        }
+    }
+
+    /// Whether `method` shades some light of `lights` from the light mesh.
+    pub fn uses_light_mesh(&self, method: Method, lights: &[RenderLight]) -> bool {
+        self.indices(lights)
+            .any(|index| self.role(method, index, lights) == LightRole::LightMesh)
+    }
+
+    /// Whether `method` shades some light of `lights` by formula (1).
+    pub fn uses_formula_one(&self, method: Method, lights: &[RenderLight]) -> bool {
+        self.indices(lights).any(|index| {
+            matches!(
+                self.role(method, index, lights),
+                LightRole::FormulaOne { .. }
+            )
+        })
+    }
+
+    /// The lights' indices: those of `lights`, and those the plan classed
+    /// (a caller without the frame's lights passes none).
+    fn indices(&self, lights: &[RenderLight]) -> std::ops::Range<usize> {
+        0..lights.len().max(self.classes.len())
+    }
+
+    /// `lights` with only those `method` shades by `wanted` left powered:
+    /// a light without power reaches no point, so an integrator given
+    /// these spends nothing on the others, and their lanes add nothing.
+    pub fn only(
+        &self,
+        method: Method,
+        lights: &[RenderLight],
+        wanted: impl Fn(LightRole) -> bool,
+    ) -> Vec<RenderLight> {
+        (lights.iter().enumerate())
+            .map(
+                |(index, light)| match wanted(self.role(method, index, lights)) {
+                    true => *light,
+                    false => RenderLight {
+                        power: Vec3::ZERO,
+                        ..*light
+                    },
+                },
+            )
+            .collect()
+    }
+
+    /// [`ShadowSplit::only`] in SIMD lanes.
+    pub fn lanes(
+        &self,
+        method: Method,
+        lights: &[RenderLight],
+        wanted: impl Fn(LightRole) -> bool,
+    ) -> LightLanes {
+        LightLanes::new(&self.only(method, lights, wanted))
+    }
+
+    /// Per class, a bit per light of `lights` in that class, in 64-bit
+    /// words (as the light mesh's masks hold them).
+    pub fn class_words(&self, class: Shadows, lights: &[RenderLight]) -> Vec<u64> {
+        let mut words = vec![0u64; lights.len().div_ceil(64)];
+        for index in (0..lights.len()).filter(|&i| self.class(i, lights) == class) {
+            words[index / 64] |= 1 << (index % 64);
+        }
+        words
+    }
+}
