@@ -16,7 +16,7 @@ fn an_empty_file_gives_the_defaults() {
     assert_eq!(settings, Settings::default());
     assert_eq!((settings.width, settings.height), (640, 360));
     assert_eq!(settings.fps, 24.0);
-    assert_eq!(settings.method, Method::Whitted);
+    assert_eq!(settings.method, Method::Auto);
     assert_eq!((settings.spp, settings.max_depth), (1, 5));
     assert_eq!(settings.exr_precision, ExrPrecision::Half);
     assert_eq!(settings.lightmesh.ki, 2.5);
