@@ -412,9 +412,7 @@ fn run_error(file: &str, error: RenderError) -> RunError {
             source,
         },
         RenderError::Gpu(error) => RunError::Backend(error.into()),
-        error @ (RenderError::NoLightMesh(_) | RenderError::MixedAutoOnGpu) => {
-            RunError::Render(error)
-        }
+        error @ RenderError::NoLightMesh(_) => RunError::Render(error),
     }
 }
 

@@ -468,35 +468,74 @@ fn the_gpu_follows_the_plan() {
     let Ok(mut gpu) = Backend::new(BackendKind::Gpu, Some(2)) else {
         return;
     };
-    // Hard and useless lights only: auto is formula (1) on the GPU.
-    let mut scene = yard_with_useless_lights();
-    scene.lights[1].radius = None;
-    let mut settings = base_settings(Method::Auto);
-    settings.width = 16;
-    settings.height = 12;
-    let cpu = render_frames(planned(scene.clone(), &settings, "0"), &settings, &[0])
-        .remove(0)
-        .0;
-    let mut sequence = planned(scene, &settings, "0");
-    let placed = sequence
-        .advance(0.0, &settings, &mut FrameStats::default())
-        .unwrap();
-    let image = sequence
-        .render(&mut gpu, &placed, &settings, &mut FrameStats::default())
-        .unwrap();
-    if gpu_rounds_as_cpu() {
-        assert_eq!(image.pixels, cpu.image.pixels);
+    let small = |method| {
+        let mut settings = base_settings(method);
+        settings.width = 24;
+        settings.height = 16;
+        settings.aovs = vec![Aov::Light];
+        settings
+    };
+    let on_gpu = |gpu: &mut Backend, scene: SceneDesc, settings: &Settings| {
+        let mut sequence = planned(scene, settings, "0");
+        let mut stats = FrameStats::default();
+        let placed = sequence.advance(0.0, settings, &mut stats).unwrap();
+        let frame = (sequence.render_frame(gpu, &placed, settings, &mut stats)).unwrap();
+        (frame, stats)
+    };
+    let on_cpu = |scene: SceneDesc, settings: &Settings| {
+        render_frames(planned(scene, settings, "0"), settings, &[0]).remove(0)
+    };
+    // Hard lights and lights that reach nothing: formula (1) alone.
+    let mut hard_only = yard_with_useless_lights();
+    hard_only.lights[1].radius = None;
+    // A hard light and two soft lamps in one frame: formula (1) for the
+    // first, then formula (2) for the others, summed in the CPU's order
+    // (with two soft terms, adding the hard one last would round apart).
+    let mut mixed = yard_with_useless_lights();
+    add_lamp(&mut mixed, 9.0, Vec3::new(1.5, 2.0, -2.0), 0.2);
+    for scene in [hard_only, mixed] {
+        let settings = small(Method::Auto);
+        let (cpu, cpu_stats) = on_cpu(scene.clone(), &settings);
+        let (frame, stats) = on_gpu(&mut gpu, scene, &settings);
+        assert_eq!(
+            stats.shadow_classes.soft.mask_bits,
+            cpu_stats.shadow_classes.soft.mask_bits
+        );
+        assert_eq!(stats.shadow_classes.hard.mask_bits, 0);
+        if gpu_rounds_as_cpu() {
+            let differing = (frame.image.pixels.iter().zip(&cpu.image.pixels))
+                .filter(|(gpu, cpu)| gpu != cpu)
+                .count();
+            assert_eq!(differing, 0, "pixels differing from the CPU's");
+            assert_eq!(frame.aovs.len(), cpu.aovs.len());
+            for (gpu_layer, cpu_layer) in frame.aovs.iter().zip(&cpu.aovs) {
+                assert_eq!(gpu_layer.channels, cpu_layer.channels);
+                let same = gpu_layer.values == cpu_layer.values;
+                assert!(same, "{:?} differs from the CPU's", gpu_layer.channels);
+            }
+        }
     }
-    // Mixed hard and soft lights: refused with one clear error.
-    let settings = base_settings(Method::Auto);
-    let mut sequence = planned(yard(), &settings, "0");
-    let placed = sequence
-        .advance(0.0, &settings, &mut FrameStats::default())
-        .unwrap();
-    let error = sequence
-        .render(&mut gpu, &placed, &settings, &mut FrameStats::default())
-        .unwrap_err();
-    assert!(error.to_string().contains("--backend gpu"), "{error}");
+    // The mixed frame's hard light equals it under `whitted`, its soft
+    // lamp equals it under `lmm1`, on the GPU too.
+    let layer = |frame: &RenderedFrame, name: &str| {
+        (frame.aovs.iter())
+            .find(|l| l.channels[0] == name)
+            .unwrap_or_else(|| panic!("{name}"))
+            .values
+            .clone()
+    };
+    let (auto, _) = on_gpu(&mut gpu, yard(), &small(Method::Auto));
+    let (whitted, _) = on_gpu(&mut gpu, yard(), &small(Method::Whitted));
+    let (lmm1, _) = on_gpu(&mut gpu, yard(), &small(Method::Lmm1));
+    assert_eq!(
+        layer(&auto, "light.hard.R"),
+        layer(&whitted, "light.hard.R")
+    );
+    assert_eq!(layer(&auto, "light.soft.R"), layer(&lmm1, "light.soft.R"));
+    assert_ne!(
+        layer(&auto, "light.soft.R"),
+        layer(&whitted, "light.soft.R")
+    );
 }
 
 fn gpu_rounds_as_cpu() -> bool {

@@ -24,7 +24,6 @@ use crate::accel::Ray;
 use crate::lightmesh::interpolate::{PointCounts, Scratch};
 use crate::lightmesh::{LightMesh, LightMeshStats};
 use crate::output::{Image, RenderedFrame};
-use crate::plan::Shadows;
 use crate::render::environment::Environment;
 use crate::render::light_terms::{PointTerms, TermLog};
 use crate::render::omega::LightLanes;
@@ -99,10 +98,7 @@ impl CpuBackend {
         })?;
         let lights = &job.frame.lights;
         if let (true, Some(mesh)) = (job.shadows.uses_light_mesh(method, lights), light_mesh) {
-            for class in Shadows::ALL {
-                let words = job.shadows.class_words(class, lights);
-                stats.shadow_classes.get_mut(class).mask_bits = mesh.masks().known_bits_of(&words);
-            }
+            super::count_class_mask_bits(job, mesh, stats);
             stats.lightmesh = Some(mesh.frame_stats(lightmesh, counts, stats.shading_points));
         }
         Ok(frame)

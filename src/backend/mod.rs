@@ -18,9 +18,21 @@ pub use gpu::{GpuBackend, GpuError};
 
 use crate::lightmesh::{LightMesh, LightMeshError};
 use crate::output::RenderedFrame;
+use crate::plan::Shadows;
 use crate::render::FrameJob;
 use crate::settings::{BackendKind, Method};
 use crate::stats::FrameStats;
+
+/// Sets `stats`' mask bits per shadow class: the (node, light) bits
+/// `mesh` holds after `job`'s frame for the lights of each class, so a
+/// run can show that the plan's `none` and formula-(1) lights cost no
+/// mask bit. Both backends count them the same way.
+fn count_class_mask_bits(job: &FrameJob, mesh: &LightMesh, stats: &mut FrameStats) {
+    for class in Shadows::ALL {
+        let words = job.shadows.class_words(class, &job.frame.lights);
+        stats.shadow_classes.get_mut(class).mask_bits = mesh.masks().known_bits_of(&words);
+    }
+}
 
 /// Why a backend could not start.
 #[derive(Debug, thiserror::Error)]
@@ -44,10 +56,6 @@ pub enum RenderError {
     /// from: the caller's mistake, never the scene's.
     #[error("--method {0} shades from a light mesh, and the frame came without one")]
     NoLightMesh(Method),
-    /// `auto` on the GPU with lights for both formula (1) and the light
-    /// mesh in one frame, which its passes cannot shade together yet.
-    #[error("--backend gpu renders --method auto only when the plan shades every light alike (all by shadow rays, or all from the light mesh); this scene has both hard and soft lights: use --backend cpu, or force --method whitted, lmm or lmm1")]
-    MixedAutoOnGpu,
     #[error(transparent)]
     Gpu(#[from] GpuError),
 }

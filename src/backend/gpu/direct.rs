@@ -23,14 +23,45 @@ use super::shaders::Entry;
 use super::surface::{LevelBuffers, SurfacePoint};
 use crate::render::light::RenderLight;
 use crate::render::omega::OmegaLight;
+use crate::render::shadow_split::LightRole;
 use crate::render::surface::ShadingPoint;
+use crate::render::FrameJob;
+use crate::settings::Method;
 
 /// The binding of the frame's lights.
 const LIGHTS: u32 = 10;
 
+/// `omega.wgsl`'s `shading` bits: the integrator a light is shaded by,
+/// and whether formula (1) tests its segment.
+const SHADED_BY_FORMULA_ONE: u32 = 1;
+const SHADED_BY_LIGHT_MESH: u32 = 2;
+const TESTS_SEGMENT: u32 = 4;
+
+/// Each of `job`'s lights' `shading` bits under `method`: its role in the
+/// frame's [`ShadowSplit`](crate::render::shadow_split::ShadowSplit), so
+/// that one frame's passes can shade some lights by formula (1) and the
+/// others by formula (2), as `auto` asks. A light switched off, or one
+/// whose lamp the CPU samples (`area`), has no integrator bit.
+pub fn shading_flags(job: &FrameJob, method: Method) -> Vec<u32> {
+    let (shadows, lights) = (job.shadows, &job.frame.lights);
+    (0..lights.len())
+        .map(|index| {
+            let segment = match shadows.tests_segment(index) {
+                true => TESTS_SEGMENT,
+                false => 0,
+            };
+            match shadows.role(method, index, lights) {
+                LightRole::FormulaOne { .. } => SHADED_BY_FORMULA_ONE | segment,
+                LightRole::LightMesh => SHADED_BY_LIGHT_MESH | segment,
+                LightRole::Off | LightRole::Lamp => 0,
+            }
+        })
+        .collect()
+}
+
 /// `omega.wgsl`'s `Light`: an [`OmegaLight`] whose missing range is 0
 /// rather than infinite, so the shader needs no infinities, with its layer
-/// of the `light` AOV.
+/// of the `light` AOV and its `shading` bits.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct FlatLight {
@@ -42,12 +73,14 @@ pub struct FlatLight {
     cos_outer: f32,
     cos_inner: f32,
     layer: u32,
-    _pad: [u32; 2],
+    shading: u32,
+    _pad: u32,
 }
 
 impl FlatLight {
-    /// `light`, adding to the `light` AOV's layer `layer`.
-    fn new(light: &RenderLight, layer: usize) -> FlatLight {
+    /// `light`, adding to the `light` AOV's layer `layer`, shaded as
+    /// `shading` says.
+    fn new(light: &RenderLight, layer: usize, shading: u32) -> FlatLight {
         let light = OmegaLight::from(light);
         FlatLight {
             origin: light.origin.to_array(),
@@ -62,7 +95,8 @@ impl FlatLight {
             cos_outer: light.cos_outer,
             cos_inner: light.cos_inner,
             layer: layer as u32,
-            _pad: [0; 2],
+            shading,
+            _pad: 0,
         }
     }
 }
@@ -108,21 +142,25 @@ impl FrameLights {
         self.count
     }
 
-    /// `lights`, all in the `light` AOV's first layer.
+    /// `lights`, each shaded by formula (1) with its segment tested, all
+    /// in the `light` AOV's first layer: what the passes run outside a
+    /// frame (tests, benchmarks) take.
     pub fn upload(context: &GpuContext, lights: &[RenderLight]) -> Result<FrameLights, GpuError> {
-        FrameLights::upload_in_layers(context, lights, &[])
+        let shading = vec![SHADED_BY_FORMULA_ONE | TESTS_SEGMENT; lights.len()];
+        FrameLights::upload_shaded(context, lights, &shading, &[])
     }
 
-    /// `lights`, each in its layer of `layer_of` (the first where it has
-    /// none).
-    pub fn upload_in_layers(
+    /// `lights` with their `shading` bits ([`shading_flags`]), each in
+    /// its layer of `layer_of` (the first where it has none).
+    pub fn upload_shaded(
         context: &GpuContext,
         lights: &[RenderLight],
+        shading: &[u32],
         layer_of: &[usize],
     ) -> Result<FrameLights, GpuError> {
         let layer = |index: usize| layer_of.get(index).copied().unwrap_or_default();
         let flat: Vec<FlatLight> = (lights.iter().enumerate())
-            .map(|(index, light)| FlatLight::new(light, layer(index)))
+            .map(|(index, light)| FlatLight::new(light, layer(index), shading[index]))
             .collect();
         Ok(FrameLights {
             buffer: storage(context, "lights", &flat)?,

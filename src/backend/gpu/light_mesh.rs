@@ -32,8 +32,10 @@ use crate::backend::RenderError;
 use crate::lightmesh::interpolate::PointCounts;
 use crate::lightmesh::{LightMesh, LightMeshStats};
 use crate::render::omega::LightLanes;
+use crate::render::shadow_split::LightRole;
 use crate::render::surface::ShadingPoint;
 use crate::render::FrameJob;
+use crate::settings::Method;
 use crate::stats::FrameStats;
 
 /// Bindings beyond the points and answers: the lights, the points'
@@ -89,6 +91,8 @@ pub struct LightMeshShading<'m> {
     mesh: &'m mut LightMesh,
     pool: &'m mut MaskPool,
     point_to_node_tests: bool,
+    /// The frame's lights with only those the light mesh shades powered:
+    /// the demand asks for their bits alone.
     lanes: LightLanes,
     /// What demand, fill and enclosure did.
     work: LightMeshStats,
@@ -107,14 +111,15 @@ impl<'m> LightMeshShading<'m> {
         context: &GpuContext,
         mesh: &'m mut LightMesh,
         pool: &'m mut MaskPool,
-        point_to_node_tests: bool,
+        method: Method,
         job: &FrameJob,
     ) -> Result<LightMeshShading<'m>, RenderError> {
+        let lights = &job.frame.lights;
         Ok(LightMeshShading {
             mesh,
             pool,
-            point_to_node_tests,
-            lanes: LightLanes::new(&job.frame.lights),
+            point_to_node_tests: method.tests_point_to_node(),
+            lanes: (job.shadows).lanes(method, lights, |role| role == LightRole::LightMesh),
             work: LightMeshStats::default(),
             counts: answer_buffer::<[u32; 8]>(context, "light-mesh counters", 1)?,
         })
@@ -256,7 +261,12 @@ impl<'m> LightMeshShading<'m> {
 
     /// The frame's light-mesh statistics, once its `shading_points` are
     /// shaded; the fill's node-to-light segments go to the shadow rays.
-    pub fn finish(self, context: &GpuContext, stats: &mut FrameStats) -> Result<(), RenderError> {
+    pub fn finish(
+        self,
+        context: &GpuContext,
+        job: &FrameJob,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
         let encoder = context.device.create_command_encoder(&Default::default());
         let [counts]: [[u32; 8]; 1] = read_back(context, encoder, &self.counts, 1)?
             .try_into()
@@ -270,6 +280,7 @@ impl<'m> LightMeshShading<'m> {
             shadow_rays: Default::default(),
         };
         stats.rays.shadow += self.work.fill_segments;
+        crate::backend::count_class_mask_bits(job, self.mesh, stats);
         stats.lightmesh = Some(
             self.mesh
                 .frame_stats(self.work, counts, stats.shading_points),

@@ -191,9 +191,10 @@ impl GpuBackend {
 
     /// Uploads what `job`'s frame needs that the GPU does not hold yet:
     /// the world as it moved, the scene's meshes and textures for a new
-    /// world, the frame's placement where it changed, and its lights (with
-    /// their layers, where the `light` AOV asks for them).
-    fn upload_frame(&mut self, job: &FrameJob) -> Result<FrameLights, GpuError> {
+    /// world, the frame's placement where it changed, and its lights
+    /// (with how `method` shades each, and their layers where the `light`
+    /// AOV asks for them).
+    fn upload_frame(&mut self, job: &FrameJob, method: Method) -> Result<FrameLights, GpuError> {
         let context = &self.context;
         Self::upload(&mut self.scene, context, job.world)?;
         let world = job.world.id();
@@ -202,13 +203,12 @@ impl GpuBackend {
             self.frame_surfaces = None;
         }
         FrameSurfaces::update(&mut self.frame_surfaces, context, job.frame)?;
-        let lights = &job.frame.lights;
-        if job.aovs.contains(&Aov::Light) {
-            let layers = LightLayers::of(job.scene);
-            FrameLights::upload_in_layers(context, lights, &layers.layer_of)
-        } else {
-            FrameLights::upload(context, lights)
-        }
+        let layer_of = match job.aovs.contains(&Aov::Light) {
+            true => LightLayers::of(job.scene).layer_of,
+            false => Vec::new(),
+        };
+        let shading = direct::shading_flags(job, method);
+        FrameLights::upload_shaded(context, &job.frame.lights, &shading, &layer_of)
     }
 
     /// `job`'s frame, whose uploads [`GpuBackend::upload_frame`] made.
@@ -229,11 +229,11 @@ impl GpuBackend {
         }
     }
 
-    /// Renders one frame by `method` (`auto` as [`gpu_method`] resolves
-    /// it), with the AOV layers `job` asks for; stage times, ray and point
-    /// counts go to `stats`. The light-mesh methods shade from
-    /// `light_mesh` (an error without one), whose masks the backend keeps
-    /// resident.
+    /// Renders one frame by `method` (`auto` shading each light as the
+    /// plan's class says: see [`direct_method`]), with the AOV layers
+    /// `job` asks for; stage times, ray and point counts go to `stats`.
+    /// The light-mesh methods shade from `light_mesh` (an error without
+    /// one), whose masks the backend keeps resident.
     pub fn render(
         &mut self,
         job: &FrameJob,
@@ -246,28 +246,21 @@ impl GpuBackend {
         if AovFrame::wants_light_terms(job) {
             self.context.check_light_layers()?;
         }
-        let lights = self.upload_frame(job)?;
+        let lights = self.upload_frame(job, method)?;
         let mut pool = match self.mask_pool.take() {
             Some(pool) => pool,
             None => MaskPool::new(&self.context, self.mask_memory)?,
         };
-        let method = gpu_method(job, method)?;
-        let mut direct = match (method, light_mesh) {
+        let mut direct = match (direct_method(job, method), light_mesh) {
             (Method::Whitted, _) => DirectMethod::Whitted,
             (Method::Area, _) => DirectMethod::Area,
-            (Method::Lmm | Method::Lmm1, Some(mesh)) => {
-                DirectMethod::LightMesh(Box::new(LightMeshShading::new(
-                    &self.context,
-                    mesh,
-                    &mut pool,
-                    method.tests_point_to_node(),
-                    job,
-                )?))
-            }
+            (Method::Lmm | Method::Lmm1, Some(mesh)) => DirectMethod::LightMesh(Box::new(
+                LightMeshShading::new(&self.context, mesh, &mut pool, method, job)?,
+            )),
             (Method::Lmm | Method::Lmm1 | Method::Auto, None) => {
                 return Err(RenderError::NoLightMesh(method))
             }
-            (Method::Auto, Some(_)) => unreachable!("gpu_method resolves auto"),
+            (Method::Auto, Some(_)) => unreachable!("direct_method resolves auto"),
         };
         let frame = self.frame(job, lights);
         stats.add_stage_time("upload", start.elapsed().as_secs_f64());
@@ -283,7 +276,7 @@ impl GpuBackend {
             Ok::<_, RenderError>(pixels)
         })?;
         if let DirectMethod::LightMesh(light_mesh) = direct {
-            light_mesh.finish(&self.context, stats)?;
+            light_mesh.finish(&self.context, job, stats)?;
         }
         self.mask_pool = Some(pool);
         let image = Image {
@@ -317,7 +310,7 @@ impl GpuBackend {
         job: &FrameJob,
         rays: &[Ray],
     ) -> Result<Vec<Option<ShadingPoint>>, GpuError> {
-        let lights = self.upload_frame(job)?;
+        let lights = self.upload_frame(job, Method::Whitted)?;
         self.frame(job, lights).shading_points(rays)
     }
 }
@@ -331,22 +324,16 @@ pub struct GpuPasses<'a> {
     pub scene: &'a GpuScene,
 }
 
-/// The one integrator the GPU runs a frame by: `auto` becomes `whitted`
-/// where the plan shades every light by formula (1) (`none` lights are
-/// off either way; unshadowed ones' segments, traced, are clear) and
-/// `lmm1` where it shades them all from the light mesh. A frame that
-/// needs both is refused: the GPU's passes shade a level by one method.
-fn gpu_method(job: &FrameJob, method: Method) -> Result<Method, RenderError> {
-    if method != Method::Auto {
-        return Ok(method);
-    }
-    let (shadows, lights) = (job.shadows, &job.frame.lights);
-    match (
-        shadows.uses_formula_one(method, lights),
-        shadows.uses_light_mesh(method, lights),
-    ) {
-        (true, true) => Err(RenderError::MixedAutoOnGpu),
-        (_, false) => Ok(Method::Whitted),
-        (false, true) => Ok(Method::Lmm1),
+/// The passes that shade a frame by `method`: `auto` runs formula (2)'s
+/// (LMM1's rule) where the plan shades some light from the light mesh,
+/// which also add the terms of the lights it shades by formula (1) (hard
+/// and unshadowed ones) first, as the CPU does; and formula (1)'s alone
+/// where it shades none from the light mesh. Each light's `shading` bits
+/// ([`direct::shading_flags`]) tell the passes which integrator is its.
+fn direct_method(job: &FrameJob, method: Method) -> Method {
+    match method {
+        Method::Auto if job.shadows.uses_light_mesh(method, &job.frame.lights) => Method::Lmm1,
+        Method::Auto => Method::Whitted,
+        forced => forced,
     }
 }

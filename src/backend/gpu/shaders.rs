@@ -348,7 +348,7 @@ mod tests {
             (
                 "Light",
                 size_of::<FlatLight>(),
-                vec![0, 12, 16, 28, 32, 44, 48, 52, 56],
+                vec![0, 12, 16, 28, 32, 44, 48, 52, 56, 60],
             ),
             ("DirectLight", size_of::<DirectLight>(), vec![0, 12]),
             ("FirstHit", size_of::<FirstHitRecord>(), vec![0, 12, 16, 28]),

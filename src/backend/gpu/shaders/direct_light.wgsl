@@ -15,5 +15,6 @@ fn direct_light(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     begin_terms(index);
-    direct[index] = formula_one(shade_point(surface));
+    let none = DirectLight(vec3<f32>(0.0), 0u);
+    direct[index] = formula_one(shade_point(surface), SHADED_BY_FORMULA_ONE, none);
 }

@@ -1,9 +1,10 @@
-// Formula (1) at a shading point: for each light in light order,
-// Omega(i, P) (`omega.wgsl`) and, where it brings light, the shadow
-// segment's any-hit test; the visible terms summed in that order, and
-// each handed to `keep_term` (the `light` AOV's, or nothing). A point
-// gets the CPU backend's bits wherever its shadow segments get its
-// answers.
+// Formula (1) at a shading point: for each light in light order whose
+// `shading` has the asked-for integrator's bit, Omega(i, P) (`omega.wgsl`)
+// and, where it brings light, the shadow segment's any-hit test (not for
+// an unshadowed light: nothing can block it); the visible terms summed in
+// that order onto a running sum, and each handed to `keep_term` (the
+// `light` AOV's, or nothing). A point gets the CPU backend's bits wherever
+// its shadow segments get its answers.
 
 struct DirectLight {
     radiance: vec3<f32>,
@@ -42,23 +43,34 @@ fn segment_blocked(origin: vec3<f32>, direction: vec3<f32>, t_max: f32) -> bool 
 // for a visible light rather than kept from the first loop: 32 colours per
 // invocation would cost registers on every adapter, a second evaluation
 // only arithmetic.
-fn formula_one(point: ShadePoint) -> DirectLight {
+//
+// The terms of the lights `shading` selects (`SHADED_BY_FORMULA_ONE` or
+// `SHADED_BY_LIGHT_MESH`) are added to `sum` in light order, as the CPU
+// adds a point's terms one after the other: `auto` adds its formula-(1)
+// lights' first and formula (2)'s after them.
+fn formula_one(point: ShadePoint, shading: u32, sum: DirectLight) -> DirectLight {
     let origin = offset_ray_origin(point.position, point.geometric_normal);
-    var radiance = vec3<f32>(0.0);
-    var shadow_rays = 0u;
+    var radiance = sum.radiance;
+    var shadow_rays = sum.shadow_rays;
     for (var first = 0u; first < params.light_count; first += 32u) {
         let count = min(params.light_count - first, 32u);
         var bringing = 0u;
+        var tested = 0u;
         for (var i = 0u; i < count; i++) {
-            if any(omega(point, lights[first + i]) != vec3<f32>(0.0)) {
+            let light = lights[first + i];
+            if (light.shading & shading) != 0u && any(omega(point, light) != vec3<f32>(0.0)) {
                 bringing |= 1u << i;
+                if (light.shading & TESTS_SEGMENT) != 0u {
+                    tested |= 1u << i;
+                }
             }
         }
-        shadow_rays += countOneBits(bringing);
+        shadow_rays += countOneBits(tested);
         while bringing != 0u {
-            let light = lights[first + firstTrailingBit(bringing)];
+            let bit = firstTrailingBit(bringing);
+            let light = lights[first + bit];
             bringing &= bringing - 1u;
-            if !shadowed(origin, light) {
+            if (tested >> bit & 1u) == 0u || !shadowed(origin, light) {
                 let term = omega(point, light);
                 radiance += term;
                 keep_term(light, term);

@@ -5,7 +5,9 @@
 // point asks for), then for each light in light order its Omega times
 // the share of kept nodes that see it. An empty set falls back to
 // formula (1). Node masks come from the pool (`mask_pool.rs`), found
-// through the directory.
+// through the directory. Under `auto` a frame may also hold lights that
+// formula (1) shades (hard and unshadowed ones): their terms come first,
+// in light order, then formula (2)'s, as the CPU backend sums them.
 //
 // The half-ball's tests round as the CPU's rows of eight lanes do, and
 // the shares are integer sums of the kernel's integer weights
@@ -140,7 +142,8 @@ fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
     let origin = offset_ray_origin(point.position, point.geometric_normal);
     let light_words = directory.header.light_words;
     let reach_base = index * light_words;
-    var radiance = vec3<f32>(0.0);
+    let first = formula_one(point, SHADED_BY_FORMULA_ONE, DirectLight(vec3<f32>(0.0), 0u));
+    var radiance = first.radiance;
     var total = 0u;
     for (var word = 0u; word < light_words; word++) {
         let t = tally(ball, origin, reach_base, word);
@@ -152,11 +155,11 @@ fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
             add_count(2u, tests);
             if total == 0u {
                 add_count(3u, 1u);
-                let fallback = formula_one(point);
+                let fallback = formula_one(point, SHADED_BY_LIGHT_MESH, first);
                 direct[index] = DirectLight(fallback.radiance, fallback.shadow_rays + tests);
                 return;
             }
-            direct[index].shadow_rays = tests;
+            direct[index].shadow_rays = first.shadow_rays + tests;
         }
         var lit = t.any;
         while lit != 0u {

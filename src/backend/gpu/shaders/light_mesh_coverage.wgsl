@@ -32,6 +32,12 @@ fn serves(mask: NodeMask, base: u32, light_words: u32) -> bool {
     return directory.header.point_to_node_tests != 0u || blocked == 0u || mask.settled;
 }
 
+// Whether `light` reaches `point` and is one the light mesh shades (the
+// demand's lanes hold the others unpowered).
+fn reaches_by_light_mesh(point: ShadePoint, light: Light) -> bool {
+    return (light.shading & SHADED_BY_LIGHT_MESH) != 0u && arrival(point, light).reaches;
+}
+
 @compute @workgroup_size(64)
 fn light_mesh_coverage(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
@@ -47,7 +53,7 @@ fn light_mesh_coverage(@builtin(global_invocation_id) id: vec3<u32>) {
         var bits = 0u;
         for (var bit = 0u; bit < 32u; bit++) {
             let light = word * 32u + bit;
-            if surface.hit != 0u && light < params.light_count && arrival(point, lights[light]).reaches {
+            if surface.hit != 0u && light < params.light_count && reaches_by_light_mesh(point, lights[light]) {
                 bits |= 1u << bit;
             }
         }

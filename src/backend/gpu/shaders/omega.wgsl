@@ -34,8 +34,19 @@ struct Light {
     cos_inner: f32,
     // Its layer of the `light` AOV (`light_layers.wgsl`).
     layer: u32,
-    _pad: array<u32, 2>,
+    // Which integrator shades it and whether formula (1) tests its
+    // segment (`ShadowSplit`'s role, as `direct.rs`'s `shading_flags`
+    // sets the bits below).
+    shading: u32,
+    _pad: u32,
 }
+
+// Shaded by formula (1) (`whitted`, `auto`'s hard and unshadowed lights).
+const SHADED_BY_FORMULA_ONE: u32 = 1u;
+// Shaded by formula (2) (`lmm`, `lmm1`, `auto`'s soft lights).
+const SHADED_BY_LIGHT_MESH: u32 = 2u;
+// Formula (1) tests its shadow segment: every light but an unshadowed one.
+const TESTS_SEGMENT: u32 = 4u;
 
 @group(0) @binding(10) var<storage, read> lights: array<Light>;
 
