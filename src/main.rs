@@ -19,6 +19,7 @@ use lmanim::anim::inspect::inspect;
 use lmanim::anim::ClipSelection;
 use lmanim::import;
 use lmanim::lightmesh::kernel::Kernel;
+use lmanim::lightmesh::penumbra::Penumbra;
 use lmanim::output::{self, ExrPrecision, FramePattern};
 use lmanim::plan;
 use lmanim::schedule::{FrameSet, Timeline};
@@ -192,6 +193,11 @@ struct RenderArgs {
     /// [default: box].
     #[arg(long, value_enum)]
     kernel: Option<Kernel>,
+    /// How wide each light's set is where its nodes disagree: fixed (kI·h,
+    /// the paper) or blocker (from the blocker's distance; CPU backend)
+    /// [default: fixed].
+    #[arg(long, value_enum)]
+    penumbra: Option<Penumbra>,
     /// Also write a tone-mapped sRGB PNG preview beside each frame.
     #[arg(long)]
     png: bool,
@@ -474,6 +480,9 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     }
     if let Some(kernel) = flags.kernel {
         settings.lightmesh.kernel = kernel;
+    }
+    if let Some(penumbra) = flags.penumbra {
+        settings.lightmesh.penumbra = penumbra;
     }
     if flags.no_cache {
         settings.cache_dir = None;

@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::lightmesh::kernel::Kernel;
 use crate::lightmesh::lattice::MAX_KI;
+use crate::lightmesh::penumbra::Penumbra;
 use crate::output::ExrPrecision;
 use crate::render::environment::Environment;
 use crate::schedule::FrameSet;
@@ -269,6 +270,11 @@ pub struct LightMeshSettings {
     /// How formula (2) weighs the nodes within the radius: `box` counts
     /// them alike (the paper), `smooth` by (1 − d²/r²)².
     pub kernel: Kernel,
+    /// How big each light's set is: `fixed`, kI·h everywhere (the paper);
+    /// `blocker`, where the nodes disagree on a light, the radius of the
+    /// penumbra a lamp of that size casts from the blocker's distance
+    /// (`lightmesh::penumbra`).
+    pub penumbra: Penumbra,
     /// h·kI/R of the lattice derived from the lamps when `h` is None: 1
     /// makes the light mesh's transition the penumbra of an occluder
     /// halfway to the lamp; more makes the lattice coarser and faster.
@@ -288,6 +294,7 @@ impl Default for LightMeshSettings {
             h: None,
             ki: 2.5,
             kernel: Kernel::default(),
+            penumbra: Penumbra::default(),
             coarseness: 1.0,
             max_memory_mib: 4096,
             gpu_memory_mib: 1024,
@@ -459,6 +466,12 @@ impl Settings {
             return Err("threads is 0; leave it out to use every core".into());
         }
         let lightmesh = &self.lightmesh;
+        if lightmesh.penumbra == Penumbra::Blocker && self.backend == BackendKind::Gpu {
+            return Err(
+                "lightmesh.penumbra is blocker, which the CPU backend alone renders so far: use --backend cpu, or penumbra fixed"
+                    .into(),
+            );
+        }
         if lightmesh.gpu_memory_mib == 0 {
             return Err("lightmesh.gpu_memory_mib is 0; it must be at least 1".into());
         }

@@ -14,6 +14,7 @@ use glam::{DMat4, DVec3, Vec3};
 
 use lmanim::backend::Backend;
 use lmanim::lightmesh::kernel::Kernel;
+use lmanim::lightmesh::penumbra::Penumbra;
 use lmanim::output::Image;
 use lmanim::scene::animation::{AnimationClip, Channel, Interpolation, Sampler};
 use lmanim::scene::pose::dynamic_nodes;
@@ -151,24 +152,38 @@ fn cpu() -> Backend {
 }
 
 /// The light-mesh runs reuse is checked for: both methods with the
-/// paper's kernel, and LMM1 with the smooth one.
-const VARIANTS: [(Method, Kernel); 3] = [
-    (Method::Lmm1, Kernel::Box),
-    (Method::Lmm, Kernel::Box),
-    (Method::Lmm1, Kernel::Smooth),
+/// paper's kernel, LMM1 with the smooth one, and LMM1 with each light's
+/// set sized by its blocker's distance (CPU backend only).
+type Variant = (Method, Kernel, Penumbra);
+const VARIANTS: [Variant; 4] = [
+    (Method::Lmm1, Kernel::Box, Penumbra::Fixed),
+    (Method::Lmm, Kernel::Box, Penumbra::Fixed),
+    (Method::Lmm1, Kernel::Smooth, Penumbra::Fixed),
+    (Method::Lmm1, Kernel::Smooth, Penumbra::Blocker),
 ];
 
-fn settings_for_variant((method, kernel): (Method, Kernel)) -> Settings {
+/// The variants the GPU backend renders.
+fn gpu_variants() -> Vec<Variant> {
+    (VARIANTS.into_iter())
+        .filter(|&(_, _, penumbra)| penumbra == Penumbra::Fixed)
+        .collect()
+}
+
+fn settings_for_variant((method, kernel, penumbra): Variant) -> Settings {
     let mut settings = settings_for(method);
     settings.lightmesh.kernel = kernel;
+    settings.lightmesh.penumbra = penumbra;
     settings
 }
 
-/// For each of [`VARIANTS`]: every time rendered by one sequence on
+/// For each of `variants`: every time rendered by one sequence on
 /// `backend`, checked equal to the same time rendered cold, bit for bit.
-fn sequences_equal_cold(scene: &SceneDesc, backend: &mut Backend) -> Vec<Vec<(Image, FrameStats)>> {
-    VARIANTS
-        .into_iter()
+fn sequences_equal_cold(
+    scene: &SceneDesc,
+    backend: &mut Backend,
+    variants: &[Variant],
+) -> Vec<Vec<(Image, FrameStats)>> {
+    (variants.iter().copied())
         .map(|variant| {
             let settings = settings_for_variant(variant);
             let frames = rendered_in_sequence(scene, &settings, backend);
@@ -186,7 +201,16 @@ fn sequences_equal_cold(scene: &SceneDesc, backend: &mut Backend) -> Vec<Vec<(Im
 
 #[test]
 fn frames_with_reused_masks_equal_frames_rendered_cold() {
-    for frames in sequences_equal_cold(&street(true, true, true), &mut cpu()) {
+    let scene = street(true, true, true);
+    let runs = sequences_equal_cold(&scene, &mut cpu(), &VARIANTS);
+    for ((_, _, penumbra), frames) in VARIANTS.into_iter().zip(runs) {
+        if penumbra == Penumbra::Blocker {
+            let rays = |(_, stats): &(Image, FrameStats)| stats.lightmesh.unwrap().blocker_rays;
+            assert!(
+                frames.iter().all(|frame| rays(frame) > 0),
+                "penumbrae were sized"
+            );
+        }
         for (&time, (_, stats)) in TIMES.iter().zip(&frames) {
             if time > 0.0 {
                 assert!(stats.objects_moved == 1 && stats.lights_moved == 1 && stats.camera_moved);
@@ -402,7 +426,7 @@ fn with_bending_sheet(mut scene: SceneDesc) -> SceneDesc {
 #[test]
 fn a_mesh_deforming_in_part_renders_every_frame_like_cold() {
     let scene = with_bending_sheet(street(false, false, false));
-    for frames in sequences_equal_cold(&scene, &mut cpu()) {
+    for frames in sequences_equal_cold(&scene, &mut cpu(), &VARIANTS) {
         for (&time, (_, stats)) in TIMES.iter().zip(&frames) {
             if time > 0.0 {
                 assert_eq!((stats.objects_moved, stats.camera_moved), (1, false));
@@ -419,7 +443,7 @@ fn a_mesh_deforming_in_part_renders_every_frame_like_cold() {
 
 /// The GPU backend keeps the masks resident across frames and uploads
 /// only the bricks edited since: with a truck whose shadow crosses the far
-/// facade, a moving lamp and a bending sheet, for each of [`VARIANTS`], its frames
+/// facade, a moving lamp and a bending sheet, for each variant it renders, its frames
 /// equal its own frames rendered cold, and (where it rounds as the CPU
 /// does) the CPU backend's, bit for bit.
 #[test]
@@ -430,8 +454,9 @@ fn gpu_frames_with_resident_masks_equal_cold_frames_and_the_cpus() {
     let exact = gpu.rounds_as_the_cpu();
     let mut gpu = Backend::Gpu(Box::new(gpu));
     let scene = with_bending_sheet(street(true, true, false));
-    let on_gpu = sequences_equal_cold(&scene, &mut gpu);
-    for (variant, gpu_frames) in VARIANTS.into_iter().zip(on_gpu) {
+    let variants = gpu_variants();
+    let on_gpu = sequences_equal_cold(&scene, &mut gpu, &variants);
+    for (variant, gpu_frames) in variants.into_iter().zip(on_gpu) {
         let cpu_frames = rendered_in_sequence(&scene, &settings_for_variant(variant), &mut cpu());
         for (&time, ((gpu, gpu_stats), (cpu, _))) in
             TIMES.iter().zip(gpu_frames.iter().zip(&cpu_frames))

@@ -309,10 +309,13 @@ fn shade_by_method<T: PointTerms>(
     };
     stats.shadow_classes.add_rays(band_counts.shadow_rays);
     // Every occlusion segment is a shadow ray: formula (1)'s, the fill's
-    // node-to-light ones and LMM's point-to-node tests.
-    stats.rays.shadow +=
-        band_counts.shadow_rays.total() + band_counts.p2n_tests + lightmesh.fill_segments
-            - segments_before;
+    // node-to-light ones, LMM's point-to-node tests, and the rays that
+    // found a penumbra's blocker.
+    stats.rays.shadow += band_counts.shadow_rays.total()
+        + band_counts.p2n_tests
+        + band_counts.blocker_rays
+        + lightmesh.fill_segments
+        - segments_before;
     Ok((shaded, terms, band_counts))
 }
 

@@ -12,12 +12,14 @@
 use glam::IVec3;
 
 use super::enclosure::blocks_some;
-use super::kernel::Kernel;
+use super::kernel::{Kernel, Weights};
 use super::masks::BrickCache;
+use super::penumbra::{self, Penumbra};
 use super::{LightMesh, LightMeshStats};
 use crate::accel::offset::offset_ray_origin;
 use crate::accel::{Ray, World};
 use crate::bits::set_bits;
+use crate::render::light::RenderLight;
 use crate::render::light_terms::LightTerms;
 use crate::render::omega::{LightLanes, PointLanes, LANES};
 use crate::render::shadow_split::ShadowSplit;
@@ -32,6 +34,8 @@ pub struct PointCounts {
     pub interp_set: u64,
     pub p2n_tests: u64,
     pub fallback: u64,
+    /// Closest-hit rays that found a light's blocker (`penumbra: blocker`).
+    pub blocker_rays: u64,
     /// Plain shadow rays (formula (1), lamp samples), by light class.
     pub shadow_rays: ClassRays,
 }
@@ -52,6 +56,7 @@ impl std::ops::AddAssign for PointCounts {
         self.interp_set += other.interp_set;
         self.p2n_tests += other.p2n_tests;
         self.fallback += other.fallback;
+        self.blocker_rays += other.blocker_rays;
         self.shadow_rays += other.shadow_rays;
     }
 }
@@ -101,6 +106,7 @@ impl LightMesh {
             mean_interp_set: counts.interp_set as f64 / points,
             mean_p2n_tests: counts.p2n_tests as f64 / points,
             fallback_points: counts.fallback,
+            blocker_rays: counts.blocker_rays,
             bits_cached: self.masks().known_bits(),
             ..work
         }
@@ -210,17 +216,113 @@ impl LightMesh {
                     let light = word * 64 + bit;
                     if all[word] >> bit & 1 == 1 {
                         terms.add(light, omega.get(lane));
-                    } else {
-                        let seen: u32 = (visible.iter().skip(word).step_by(words))
-                            .zip(weights.iter())
-                            .filter(|&(&seen, _)| seen >> bit & 1 == 1)
+                        continue;
+                    }
+                    // The nodes disagree on this light: the point is in
+                    // its penumbra, or near it.
+                    let sees = || {
+                        (visible.iter().skip(word).step_by(words))
+                            .map(move |&seen| seen >> bit & 1 == 1)
+                    };
+                    let fixed = || {
+                        let seen: u32 = (sees().zip(weights.iter()))
+                            .filter(|&(sees, _)| sees)
                             .map(|(_, &weight)| weight)
                             .sum();
-                        terms.add(light, omega.get(lane) * (seen as f32 / total as f32));
+                        Share::Part(seen as f32 / total as f32)
+                    };
+                    let by_blocker = || {
+                        let set = nodes.iter().zip(sees()).map(|(&node, sees)| SetNode {
+                            node,
+                            distance_squared: self.lattice.distance_squared(node, point.position),
+                            sees,
+                        });
+                        self.blocker_share(point, &lights.lights()[light], set, world)
+                    };
+                    let blocker = match self.penumbra {
+                        Penumbra::Blocker => by_blocker(),
+                        Penumbra::Fixed => None,
+                    };
+                    let share = match blocker {
+                        Some((share, rays)) => {
+                            counts.blocker_rays += rays;
+                            share
+                        }
+                        None => fixed(),
+                    };
+                    match share {
+                        Share::Full => terms.add(light, omega.get(lane)),
+                        Share::Part(share) => terms.add(light, omega.get(lane) * share),
+                        Share::Hidden => {}
                     }
                 }
             }
         }
         counts
+    }
+
+    /// The share of `light` at `point` by its blocker's distance
+    /// ([`penumbra`]): over the nodes of the `set` that lie within the
+    /// radius the light's penumbra wants there, or the centre ray's answer
+    /// where that radius holds no node; and the rays it traced. None for a
+    /// light without a position to size a penumbra by.
+    fn blocker_share(
+        &self,
+        point: &ShadingPoint,
+        light: &RenderLight,
+        set: impl Iterator<Item = SetNode> + Clone,
+        world: &World,
+    ) -> Option<(Share, u64)> {
+        let nearest_blocked = (set.clone())
+            .filter(|node| !node.sees)
+            .min_by(|a, b| a.distance_squared.total_cmp(&b.distance_squared))
+            .map_or(point.position, |node| self.lattice.node_position(node.node));
+        let origin = offset_ray_origin(point.position, point.geometric_normal);
+        let (max_radius, h) = (self.radius(), self.lattice.h);
+        let estimate = penumbra::estimate(origin, light, nearest_blocked, world, max_radius, h)?;
+        let hard = match estimate.centre_visible {
+            true => Share::Full,
+            false => Share::Hidden,
+        };
+        let interpolated =
+            (estimate.radius).and_then(|radius| Share::within(set, self.kernel, radius));
+        Some((interpolated.unwrap_or(hard), estimate.rays))
+    }
+}
+
+/// A node of a point's interpolation set, seen from one light.
+#[derive(Clone, Copy)]
+struct SetNode {
+    node: IVec3,
+    /// Its squared distance to the point, rounded as the half-ball does.
+    distance_squared: f32,
+    /// Whether it sees the light.
+    sees: bool,
+}
+
+/// What formula (2) gives a light at a point whose set disagrees on it.
+enum Share {
+    /// The light's whole Omega.
+    Full,
+    /// None of it.
+    Hidden,
+    /// This fraction of it.
+    Part(f32),
+}
+
+impl Share {
+    /// The weight of the nodes of `set` within `radius` that see the
+    /// light over the weight of all of them, with `kernel` sized to
+    /// `radius`; None where they weigh nothing.
+    fn within(set: impl Iterator<Item = SetNode>, kernel: Kernel, radius: f32) -> Option<Share> {
+        let weights = Weights::new(kernel, radius);
+        let radius_squared = radius * radius;
+        let (mut total, mut seen) = (0u32, 0u32);
+        for node in set.filter(|node| node.distance_squared <= radius_squared) {
+            let weight = weights.weight(node.distance_squared);
+            total += weight;
+            seen += if node.sees { weight } else { 0 };
+        }
+        (total > 0).then(|| Share::Part(seen as f32 / total as f32))
     }
 }

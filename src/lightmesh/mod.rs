@@ -18,6 +18,7 @@ pub mod invalidate;
 pub mod kernel;
 pub mod lattice;
 pub mod masks;
+pub mod penumbra;
 pub mod persistent;
 mod region_tree;
 pub mod segments;
@@ -28,6 +29,7 @@ use serde::Serialize;
 use kernel::{Kernel, Weights};
 use lattice::Lattice;
 use masks::MaskStore;
+use penumbra::Penumbra;
 
 /// A light mesh with its masks; it outlives frames so masks are reused.
 #[derive(Clone, Debug)]
@@ -37,6 +39,8 @@ pub struct LightMesh {
     pub ki: f32,
     /// How formula (2) weighs the nodes of a set.
     pub kernel: Kernel,
+    /// How formula (2) sizes each light's set.
+    pub penumbra: Penumbra,
     masks: MaskStore,
     /// Bytes the masks may take before a frame is refused.
     memory_limit: usize,
@@ -103,6 +107,10 @@ pub struct LightMeshStats {
     pub mean_p2n_tests: f64,
     /// Points shaded by formula (1) because their set was empty.
     pub fallback_points: u64,
+    /// Closest-hit rays that sized a penumbra by its blocker's distance
+    /// (`lightmesh.penumbra: blocker`): one or two per point and light
+    /// its nodes disagree on.
+    pub blocker_rays: u64,
     /// Nodes probed for lying inside closed geometry this frame (LMM1
     /// only; each node once per run).
     pub nodes_probed: u64,
@@ -127,6 +135,7 @@ impl LightMesh {
             lattice,
             ki,
             kernel: Kernel::Box,
+            penumbra: Penumbra::Fixed,
             masks: MaskStore::new(lights),
             memory_limit,
         }

@@ -104,6 +104,7 @@ impl PersistentLightMesh {
         let limit = settings.max_memory_mib.saturating_mul(1 << 20);
         let mut mesh = LightMesh::new(lattice, ki, lights.len(), limit);
         mesh.kernel = settings.kernel;
+        mesh.penumbra = settings.penumbra;
         if let Some(dir) = &self.cache_dir {
             self.bits_loaded = mesh.load_static_masks(dir, self.static_geometry, lights);
             self.cache_start = lights.iter().map(LightKey::of).collect();

@@ -277,6 +277,7 @@ impl<'m> LightMeshShading<'m> {
             interp_set: pair(1),
             p2n_tests: pair(2),
             fallback: pair(3),
+            blocker_rays: 0,
             shadow_rays: Default::default(),
         };
         stats.rays.shadow += self.work.fill_segments;
