@@ -72,6 +72,8 @@ pub struct Scratch<'a> {
     /// Per light word: lights visible from every node, from some node.
     all: Vec<u64>,
     any: Vec<u64>,
+    /// The nodes of a penumbra's lattice level (`penumbra: blocker`).
+    level_nodes: Vec<IVec3>,
     bricks: BrickCache<'a>,
 }
 
@@ -83,6 +85,7 @@ impl<'a> Scratch<'a> {
             visible: Vec::new(),
             all: Vec::new(),
             any: Vec::new(),
+            level_nodes: Vec::new(),
             bricks: BrickCache::new(mesh.masks()),
         }
     }
@@ -136,6 +139,7 @@ impl LightMesh {
             visible,
             all,
             any,
+            level_nodes,
             bricks,
         } = scratch;
         nodes.clear();
@@ -231,25 +235,22 @@ impl LightMesh {
                             .sum();
                         Share::Part(seen as f32 / total as f32)
                     };
-                    let by_blocker = || {
-                        let set = nodes.iter().zip(sees()).map(|(&node, sees)| SetNode {
-                            node,
-                            distance_squared: self.lattice.distance_squared(node, point.position),
-                            sees,
-                        });
-                        self.blocker_share(point, &lights.lights()[light], set, world)
-                    };
-                    let blocker = match self.penumbra {
-                        Penumbra::Blocker => by_blocker(),
-                        Penumbra::Fixed => None,
-                    };
-                    let share = match blocker {
-                        Some((share, rays)) => {
-                            counts.blocker_rays += rays;
-                            share
+                    let (by_blocker, rays) = match self.penumbra {
+                        Penumbra::Blocker => {
+                            let set = nodes.iter().zip(sees()).map(|(&node, sees)| SetNode {
+                                node,
+                                distance_squared: self
+                                    .lattice
+                                    .distance_squared(node, point.position),
+                                sees,
+                            });
+                            let light = &lights.lights()[light];
+                            self.blocker_share(point, light, set, world, level_nodes)
                         }
-                        None => fixed(),
+                        Penumbra::Fixed => (None, 0),
                     };
+                    counts.blocker_rays += rays;
+                    let share = by_blocker.unwrap_or_else(fixed);
                     match share {
                         Share::Full => terms.add(light, omega.get(lane)),
                         Share::Part(share) => terms.add(light, omega.get(lane) * share),
@@ -262,31 +263,57 @@ impl LightMesh {
     }
 
     /// The share of `light` at `point` by its blocker's distance
-    /// ([`penumbra`]): over the nodes of the `set` that lie within the
-    /// radius the light's penumbra wants there, or the centre ray's answer
-    /// where that radius holds no node; and the rays it traced. None for a
-    /// light without a position to size a penumbra by.
+    /// ([`penumbra`]): over the half-ball of the lattice level that the
+    /// light's penumbra wants there, its nodes' segments traced (into
+    /// `level_nodes`), or the centre ray's answer where the penumbra is
+    /// too narrow for any level; and the rays it traced. `set` is the
+    /// point's interpolation set seen from the light. The share is None
+    /// where nothing sizes the penumbra (a light without a position, or
+    /// a blocked node whose segment is found clear): the half-ball's
+    /// share stands there.
     fn blocker_share(
         &self,
         point: &ShadingPoint,
         light: &RenderLight,
-        set: impl Iterator<Item = SetNode> + Clone,
+        set: impl Iterator<Item = SetNode>,
         world: &World,
-    ) -> Option<(Share, u64)> {
-        let nearest_blocked = (set.clone())
+        level_nodes: &mut Vec<IVec3>,
+    ) -> (Option<Share>, u64) {
+        let nearest_blocked = set
             .filter(|node| !node.sees)
             .min_by(|a, b| a.distance_squared.total_cmp(&b.distance_squared))
             .map_or(point.position, |node| self.lattice.node_position(node.node));
         let origin = offset_ray_origin(point.position, point.geometric_normal);
-        let (max_radius, h) = (self.radius(), self.lattice.h);
-        let estimate = penumbra::estimate(origin, light, nearest_blocked, world, max_radius, h)?;
+        let Some(estimate) = penumbra::estimate(origin, light, nearest_blocked, world) else {
+            return (None, 0);
+        };
         let hard = match estimate.centre_visible {
             true => Share::Full,
             false => Share::Hidden,
         };
-        let interpolated =
-            (estimate.radius).and_then(|radius| Share::within(set, self.kernel, radius));
-        Some((interpolated.unwrap_or(hard), estimate.rays))
+        let Some(radius) = estimate.radius else {
+            return (None, estimate.rays);
+        };
+        let Some(level) = penumbra::level(self.lattice, self.ki, radius) else {
+            return (Some(hard), estimate.rays);
+        };
+        let radius = self.ki * level.h;
+        level_nodes.clear();
+        level.half_ball(point.position, point.geometric_normal, radius, level_nodes);
+        let weights = Weights::new(self.kernel, radius);
+        let (mut total, mut seen) = (0u32, 0u32);
+        for &node in level_nodes.iter() {
+            let weight = weights.weight(level.distance_squared(node, point.position));
+            total += weight;
+            if !world.occluded(&light.shadow_ray(level.node_position(node))) {
+                seen += weight;
+            }
+        }
+        let rays = estimate.rays + level_nodes.len() as u64;
+        match total {
+            0 => (Some(hard), rays),
+            _ => (Some(Share::Part(seen as f32 / total as f32)), rays),
+        }
     }
 }
 
@@ -308,21 +335,4 @@ enum Share {
     Hidden,
     /// This fraction of it.
     Part(f32),
-}
-
-impl Share {
-    /// The weight of the nodes of `set` within `radius` that see the
-    /// light over the weight of all of them, with `kernel` sized to
-    /// `radius`; None where they weigh nothing.
-    fn within(set: impl Iterator<Item = SetNode>, kernel: Kernel, radius: f32) -> Option<Share> {
-        let weights = Weights::new(kernel, radius);
-        let radius_squared = radius * radius;
-        let (mut total, mut seen) = (0u32, 0u32);
-        for node in set.filter(|node| node.distance_squared <= radius_squared) {
-            let weight = weights.weight(node.distance_squared);
-            total += weight;
-            seen += if node.sees { weight } else { 0 };
-        }
-        (total > 0).then(|| Share::Part(seen as f32 / total as f32))
-    }
 }

@@ -107,9 +107,9 @@ pub struct LightMeshStats {
     pub mean_p2n_tests: f64,
     /// Points shaded by formula (1) because their set was empty.
     pub fallback_points: u64,
-    /// Closest-hit rays that sized a penumbra by its blocker's distance
-    /// (`lightmesh.penumbra: blocker`): one or two per point and light
-    /// its nodes disagree on.
+    /// Rays of `lightmesh.penumbra: blocker`, per point and light its
+    /// nodes disagree on: one or two closest-hit rays to find the blocker,
+    /// and one segment per node of the lattice level's half-ball.
     pub blocker_rays: u64,
     /// Nodes probed for lying inside closed geometry this frame (LMM1
     /// only; each node once per run).

@@ -14,11 +14,20 @@
 //! disagrees on a light (some of its nodes see the light, some do not)
 //! traces one closest-hit ray towards the light's centre; where that ray
 //! is clear (the lit half of the penumbra), one more from the blocked
-//! node nearest the point. The first hit gives z, and the light's share
-//! is then interpolated over the nodes within r_i = R·z / (D − z), capped
-//! at kI·h. Where r_i is below one lattice step the set holds too few
-//! nodes to interpolate, and the light is taken as visible or not as the
-//! centre ray found: a hard shadow, which is what the lamp gives there.
+//! node nearest the point. The first hit gives z, and so the radius
+//! r_i = R·z / (D − z) the light's penumbra wants at the point.
+//!
+//! A half-ball of the light mesh's own step h resolves one width of
+//! penumbra well, 2·kI·h: with fewer nodes its shares turn coarse, and it
+//! cannot reach further. So the light's share is interpolated over the
+//! half-ball of the lattice level whose radius kI·h_k comes nearest r_i,
+//! h_k = h·2^k for k from [`FINEST_LEVEL`] to [`COARSEST_LEVEL`] (the
+//! levels share the mesh's origin, so a coarser level's nodes are nodes
+//! of the mesh): narrow at a contact, wide far from the occluder. Those
+//! nodes' segments to the light are traced at the point, for that light
+//! alone, and kept nowhere. Below the finest level the light is taken
+//! as visible or not as the centre ray found: a hard shadow, which is
+//! what the lamp gives there.
 //!
 //! Points whose nodes all agree on a light (far from any shadow edge, most
 //! points) trace nothing and keep their value. Nothing here is kept from
@@ -27,6 +36,7 @@
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
+use super::lattice::Lattice;
 use crate::accel::{Ray, World};
 use crate::render::light::{LightSource, RenderLight};
 
@@ -44,11 +54,16 @@ pub enum Penumbra {
     Blocker,
 }
 
+/// The finest and the coarsest level a penumbra's set is taken from, as
+/// powers of two of the light mesh's step.
+pub const FINEST_LEVEL: i32 = -3;
+pub const COARSEST_LEVEL: i32 = 3;
+
 /// What the rays towards one light found at one point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BlockerEstimate {
-    /// The radius the light's penumbra wants at the point, capped at the
-    /// half-ball's; `None` where it is below one lattice step.
+    /// The radius the light's penumbra wants at the point; `None` where
+    /// nothing could be found to size it by.
     pub radius: Option<f32>,
     /// Whether the ray from the point to the light's centre is clear.
     pub centre_visible: bool,
@@ -58,16 +73,13 @@ pub struct BlockerEstimate {
 
 /// The physical penumbra radius of `light` at the point whose ray origin
 /// is `origin`, for a set whose blocked node nearest the point lies at
-/// `nearest_blocked`. `max_radius` is the half-ball's radius and `h` the
-/// lattice step. Returns `None` for a light without a position (a
+/// `nearest_blocked`. Returns `None` for a light without a position (a
 /// directional light has no lamp to size a penumbra by).
 pub fn estimate(
     origin: Vec3,
     light: &RenderLight,
     nearest_blocked: Vec3,
     world: &World,
-    max_radius: f32,
-    h: f32,
 ) -> Option<BlockerEstimate> {
     let centre = match light.source {
         LightSource::Point { position } | LightSource::Spot { position, .. } => position,
@@ -81,22 +93,33 @@ pub fn estimate(
             (blocker_distance(&node_ray, centre, world), 2)
         }
     };
-    let centre_visible = rays == 2;
-    // A blocked node whose own segment is found clear (it can only be one
-    // the dynamic layer marked, since moved away): nothing to size by,
-    // so the set keeps the half-ball's radius.
-    let Some((z, distance)) = blocker else {
-        return Some(BlockerEstimate {
-            radius: Some(max_radius),
-            centre_visible,
-            rays,
-        });
-    };
-    let radius = light.lamp_radius * z / (distance - z).max(f32::MIN_POSITIVE);
+    // A blocked node whose own segment is found clear can only be one the
+    // dynamic layer marked, since moved away: nothing to size by.
+    let radius =
+        blocker.map(|(z, distance)| light.lamp_radius * z / (distance - z).max(f32::MIN_POSITIVE));
     Some(BlockerEstimate {
-        radius: (radius >= h).then(|| radius.min(max_radius)),
-        centre_visible,
+        radius,
+        centre_visible: rays == 2,
         rays,
+    })
+}
+
+/// The level of `mesh_lattice` whose half-ball radius `ki`·h_k comes
+/// nearest `radius` (by ratio), or `None` where `radius` is below half the
+/// finest level's: too narrow a penumbra for any level to resolve.
+pub fn level(mesh_lattice: Lattice, ki: f32, radius: f32) -> Option<Lattice> {
+    let steps = radius / (ki * mesh_lattice.h);
+    let finest = (FINEST_LEVEL as f32).exp2();
+    if steps.is_nan() || steps < 0.5 * finest {
+        return None;
+    }
+    let level = steps
+        .log2()
+        .round()
+        .clamp(FINEST_LEVEL as f32, COARSEST_LEVEL as f32);
+    Some(Lattice {
+        origin: mesh_lattice.origin,
+        h: mesh_lattice.h * level.exp2(),
     })
 }
 
@@ -106,4 +129,25 @@ fn blocker_distance(ray: &Ray, centre: Vec3, world: &World) -> Option<(f32, f32)
     let hit = world.closest_hit(ray)?;
     let distance = (centre - ray.origin).length();
     Some((hit.t * distance, distance))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_level_follows_the_radius_by_powers_of_two() {
+        let mesh = Lattice::new(0.1);
+        let h_of = |radius| level(mesh, 2.5, radius).map(|lattice| lattice.h);
+        assert_eq!(h_of(0.25), Some(0.1));
+        assert_eq!(h_of(0.5), Some(0.2));
+        assert_eq!(h_of(0.12), Some(0.05));
+        // Past the coarsest and the finest levels.
+        assert_eq!(h_of(100.0), Some(0.8));
+        assert_eq!(h_of(0.25 / 8.0), Some(0.0125));
+        assert_eq!(h_of(0.25 / 12.0), Some(0.0125));
+        assert_eq!(h_of(0.25 / 17.0), None);
+        assert_eq!(h_of(0.0), None);
+        assert_eq!(level(mesh, 2.5, 0.5).unwrap().origin, mesh.origin);
+    }
 }
