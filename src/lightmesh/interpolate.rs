@@ -279,9 +279,14 @@ impl LightMesh {
         world: &World,
         level_nodes: &mut Vec<IVec3>,
     ) -> (Option<Share>, u64) {
+        // Ties (a lattice has many nodes at one distance) go to the least
+        // coordinates, so the choice does not depend on the set's order.
         let nearest_blocked = set
             .filter(|node| !node.sees)
-            .min_by(|a, b| a.distance_squared.total_cmp(&b.distance_squared))
+            .min_by(|a, b| {
+                (a.distance_squared.total_cmp(&b.distance_squared))
+                    .then_with(|| a.node.to_array().cmp(&b.node.to_array()))
+            })
             .map_or(point.position, |node| self.lattice.node_position(node.node));
         let origin = offset_ray_origin(point.position, point.geometric_normal);
         let Some(estimate) = penumbra::estimate(origin, light, nearest_blocked, world) else {

@@ -105,21 +105,23 @@ pub fn estimate(
 }
 
 /// The level of `mesh_lattice` whose half-ball radius `ki`·h_k comes
-/// nearest `radius` (by ratio), or `None` where `radius` is below half the
-/// finest level's: too narrow a penumbra for any level to resolve.
+/// nearest `radius` by ratio (the boundaries between levels lie at
+/// √2·2^k of the mesh's own radius), or `None` where `radius` is below
+/// the finest level's lower boundary: too narrow a penumbra for any level
+/// to resolve. Only comparisons with exact powers of two of one constant
+/// decide it, so the GPU picks the same level.
 pub fn level(mesh_lattice: Lattice, ki: f32, radius: f32) -> Option<Lattice> {
     let steps = radius / (ki * mesh_lattice.h);
-    let finest = (FINEST_LEVEL as f32).exp2();
-    if steps.is_nan() || steps < 0.5 * finest {
+    let boundary = |level: i32| std::f32::consts::SQRT_2 * (level as f32).exp2();
+    if !(steps >= boundary(FINEST_LEVEL - 1)) {
         return None;
     }
-    let level = steps
-        .log2()
-        .round()
-        .clamp(FINEST_LEVEL as f32, COARSEST_LEVEL as f32);
+    let level = (FINEST_LEVEL..COARSEST_LEVEL)
+        .find(|&level| steps < boundary(level))
+        .unwrap_or(COARSEST_LEVEL);
     Some(Lattice {
         origin: mesh_lattice.origin,
-        h: mesh_lattice.h * level.exp2(),
+        h: mesh_lattice.h * (level as f32).exp2(),
     })
 }
 
@@ -145,9 +147,14 @@ mod tests {
         // Past the coarsest and the finest levels.
         assert_eq!(h_of(100.0), Some(0.8));
         assert_eq!(h_of(0.25 / 8.0), Some(0.0125));
-        assert_eq!(h_of(0.25 / 12.0), Some(0.0125));
-        assert_eq!(h_of(0.25 / 17.0), None);
+        assert_eq!(h_of(0.25 / 11.0), Some(0.0125));
+        assert_eq!(h_of(0.25 / 12.0), None);
         assert_eq!(h_of(0.0), None);
+        assert_eq!(h_of(f32::NAN), None);
+        // The boundary between levels 0 and 1 is √2 steps of the mesh.
+        let boundary = 2.5 * 0.1 * std::f32::consts::SQRT_2;
+        assert_eq!(h_of(boundary * 0.999), Some(0.1));
+        assert_eq!(h_of(boundary * 1.001), Some(0.2));
         assert_eq!(level(mesh, 2.5, 0.5).unwrap().origin, mesh.origin);
     }
 }
