@@ -466,12 +466,6 @@ impl Settings {
             return Err("threads is 0; leave it out to use every core".into());
         }
         let lightmesh = &self.lightmesh;
-        if lightmesh.penumbra == Penumbra::Blocker && self.backend == BackendKind::Gpu {
-            return Err(
-                "lightmesh.penumbra is blocker, which the CPU backend alone renders so far: use --backend cpu, or penumbra fixed"
-                    .into(),
-            );
-        }
         if lightmesh.gpu_memory_mib == 0 {
             return Err("lightmesh.gpu_memory_mib is 0; it must be at least 1".into());
         }

@@ -153,7 +153,7 @@ fn cpu() -> Backend {
 
 /// The light-mesh runs reuse is checked for: both methods with the
 /// paper's kernel, LMM1 with the smooth one, and LMM1 with each light's
-/// set sized by its blocker's distance (CPU backend only).
+/// set sized by its blocker's distance.
 type Variant = (Method, Kernel, Penumbra);
 const VARIANTS: [Variant; 4] = [
     (Method::Lmm1, Kernel::Box, Penumbra::Fixed),
@@ -162,13 +162,6 @@ const VARIANTS: [Variant; 4] = [
     (Method::Lmm1, Kernel::Smooth, Penumbra::Blocker),
 ];
 
-/// The variants the GPU backend renders.
-fn gpu_variants() -> Vec<Variant> {
-    (VARIANTS.into_iter())
-        .filter(|&(_, _, penumbra)| penumbra == Penumbra::Fixed)
-        .collect()
-}
-
 fn settings_for_variant((method, kernel, penumbra): Variant) -> Settings {
     let mut settings = settings_for(method);
     settings.lightmesh.kernel = kernel;
@@ -176,14 +169,11 @@ fn settings_for_variant((method, kernel, penumbra): Variant) -> Settings {
     settings
 }
 
-/// For each of `variants`: every time rendered by one sequence on
+/// For each of [`VARIANTS`]: every time rendered by one sequence on
 /// `backend`, checked equal to the same time rendered cold, bit for bit.
-fn sequences_equal_cold(
-    scene: &SceneDesc,
-    backend: &mut Backend,
-    variants: &[Variant],
-) -> Vec<Vec<(Image, FrameStats)>> {
-    (variants.iter().copied())
+fn sequences_equal_cold(scene: &SceneDesc, backend: &mut Backend) -> Vec<Vec<(Image, FrameStats)>> {
+    VARIANTS
+        .into_iter()
         .map(|variant| {
             let settings = settings_for_variant(variant);
             let frames = rendered_in_sequence(scene, &settings, backend);
@@ -202,7 +192,7 @@ fn sequences_equal_cold(
 #[test]
 fn frames_with_reused_masks_equal_frames_rendered_cold() {
     let scene = street(true, true, true);
-    let runs = sequences_equal_cold(&scene, &mut cpu(), &VARIANTS);
+    let runs = sequences_equal_cold(&scene, &mut cpu());
     for ((_, _, penumbra), frames) in VARIANTS.into_iter().zip(runs) {
         if penumbra == Penumbra::Blocker {
             let rays = |(_, stats): &(Image, FrameStats)| stats.lightmesh.unwrap().blocker_rays;
@@ -426,7 +416,7 @@ fn with_bending_sheet(mut scene: SceneDesc) -> SceneDesc {
 #[test]
 fn a_mesh_deforming_in_part_renders_every_frame_like_cold() {
     let scene = with_bending_sheet(street(false, false, false));
-    for frames in sequences_equal_cold(&scene, &mut cpu(), &VARIANTS) {
+    for frames in sequences_equal_cold(&scene, &mut cpu()) {
         for (&time, (_, stats)) in TIMES.iter().zip(&frames) {
             if time > 0.0 {
                 assert_eq!((stats.objects_moved, stats.camera_moved), (1, false));
@@ -443,7 +433,7 @@ fn a_mesh_deforming_in_part_renders_every_frame_like_cold() {
 
 /// The GPU backend keeps the masks resident across frames and uploads
 /// only the bricks edited since: with a truck whose shadow crosses the far
-/// facade, a moving lamp and a bending sheet, for each variant it renders, its frames
+/// facade, a moving lamp and a bending sheet, for each of [`VARIANTS`], its frames
 /// equal its own frames rendered cold, and (where it rounds as the CPU
 /// does) the CPU backend's, bit for bit.
 #[test]
@@ -454,9 +444,8 @@ fn gpu_frames_with_resident_masks_equal_cold_frames_and_the_cpus() {
     let exact = gpu.rounds_as_the_cpu();
     let mut gpu = Backend::Gpu(Box::new(gpu));
     let scene = with_bending_sheet(street(true, true, false));
-    let variants = gpu_variants();
-    let on_gpu = sequences_equal_cold(&scene, &mut gpu, &variants);
-    for (variant, gpu_frames) in variants.into_iter().zip(on_gpu) {
+    let on_gpu = sequences_equal_cold(&scene, &mut gpu);
+    for (variant, gpu_frames) in VARIANTS.into_iter().zip(on_gpu) {
         let cpu_frames = rendered_in_sequence(&scene, &settings_for_variant(variant), &mut cpu());
         for (&time, ((gpu, gpu_stats), (cpu, _))) in
             TIMES.iter().zip(gpu_frames.iter().zip(&cpu_frames))

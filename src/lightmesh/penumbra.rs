@@ -112,8 +112,8 @@ pub fn estimate(
 /// decide it, so the GPU picks the same level.
 pub fn level(mesh_lattice: Lattice, ki: f32, radius: f32) -> Option<Lattice> {
     let steps = radius / (ki * mesh_lattice.h);
-    let boundary = |level: i32| std::f32::consts::SQRT_2 * (level as f32).exp2();
-    if !(steps >= boundary(FINEST_LEVEL - 1)) {
+    let boundary = |level: i32| std::f32::consts::SQRT_2 * power_of_two(level);
+    if steps.is_nan() || steps < boundary(FINEST_LEVEL - 1) {
         return None;
     }
     let level = (FINEST_LEVEL..COARSEST_LEVEL)
@@ -121,8 +121,13 @@ pub fn level(mesh_lattice: Lattice, ki: f32, radius: f32) -> Option<Lattice> {
         .unwrap_or(COARSEST_LEVEL);
     Some(Lattice {
         origin: mesh_lattice.origin,
-        h: mesh_lattice.h * (level as f32).exp2(),
+        h: mesh_lattice.h * power_of_two(level),
     })
+}
+
+/// 2^`exponent`, exactly (from its bits: `exp2` need not be exact).
+pub fn power_of_two(exponent: i32) -> f32 {
+    f32::from_bits(((127 + exponent) as u32) << 23)
 }
 
 /// The distance from `ray`'s origin to the first thing it hits, and from

@@ -74,13 +74,16 @@ pub struct FlatLight {
     cos_inner: f32,
     layer: u32,
     shading: u32,
-    _pad: u32,
+    /// The lamp's radius, which sizes its penumbrae
+    /// (`lightmesh::penumbra`).
+    lamp_radius: f32,
 }
 
 impl FlatLight {
     /// `light`, adding to the `light` AOV's layer `layer`, shaded as
     /// `shading` says.
     fn new(light: &RenderLight, layer: usize, shading: u32) -> FlatLight {
+        let lamp_radius = light.lamp_radius;
         let light = OmegaLight::from(light);
         FlatLight {
             origin: light.origin.to_array(),
@@ -96,7 +99,7 @@ impl FlatLight {
             cos_inner: light.cos_inner,
             layer: layer as u32,
             shading,
-            _pad: 0,
+            lamp_radius,
         }
     }
 }

@@ -121,7 +121,7 @@ impl<'m> LightMeshShading<'m> {
             point_to_node_tests: method.tests_point_to_node(),
             lanes: (job.shadows).lanes(method, lights, |role| role == LightRole::LightMesh),
             work: LightMeshStats::default(),
-            counts: answer_buffer::<[u32; 8]>(context, "light-mesh counters", 1)?,
+            counts: answer_buffer::<[u32; 10]>(context, "light-mesh counters", 1)?,
         })
     }
 
@@ -268,7 +268,7 @@ impl<'m> LightMeshShading<'m> {
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
         let encoder = context.device.create_command_encoder(&Default::default());
-        let [counts]: [[u32; 8]; 1] = read_back(context, encoder, &self.counts, 1)?
+        let [counts]: [[u32; 10]; 1] = read_back(context, encoder, &self.counts, 1)?
             .try_into()
             .expect("one counter record was read");
         let pair = |at: usize| counts[2 * at] as u64 | (counts[2 * at + 1] as u64) << 32;
@@ -277,7 +277,7 @@ impl<'m> LightMeshShading<'m> {
             interp_set: pair(1),
             p2n_tests: pair(2),
             fallback: pair(3),
-            blocker_rays: 0,
+            blocker_rays: pair(4),
             shadow_rays: Default::default(),
         };
         stats.rays.shadow += self.work.fill_segments;

@@ -37,6 +37,7 @@ use super::scene::storage;
 use crate::backend::RenderError;
 use crate::lightmesh::kernel::Kernel;
 use crate::lightmesh::masks::{BrickEnclosure, MaskStore, BRICK_NODES, BRICK_WORDS};
+use crate::lightmesh::penumbra::Penumbra;
 use crate::lightmesh::{LightMesh, LightMeshError};
 
 /// Groups of light words per node: visible, then valid.
@@ -60,8 +61,11 @@ pub struct MeshHeader {
     pub inverse_radius_squared: f32,
     /// 0 for the box kernel, 1 for the smooth one.
     pub smooth_kernel: u32,
+    /// 1 where each light's set is sized by its blocker's distance
+    /// (`lightmesh.penumbra: blocker`), 0 for the fixed radius.
+    pub blocker_penumbra: u32,
     /// WGSL rounds the struct up to its vec3's alignment of 16 bytes.
-    pub padding: [u32; 2],
+    pub padding: u32,
 }
 
 /// A directory entry: a brick's coordinates and its slot, or
@@ -347,7 +351,8 @@ impl MaskPool {
             point_to_node_tests: point_to_node_tests as u32,
             inverse_radius_squared: weights.inverse_radius_squared(),
             smooth_kernel: (weights.kernel() == Kernel::Smooth) as u32,
-            padding: [0; 2],
+            blocker_penumbra: (mesh.penumbra == Penumbra::Blocker) as u32,
+            padding: 0,
         };
         if !self.directory_stale && self.directory.as_ref().is_some_and(|(h, _)| *h == header) {
             return Ok(());

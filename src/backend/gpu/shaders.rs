@@ -365,7 +365,7 @@ mod tests {
             (
                 "MeshHeader",
                 size_of::<MeshHeader>(),
-                vec![0, 12, 16, 20, 24, 28, 32, 36],
+                vec![0, 12, 16, 20, 24, 28, 32, 36, 40],
             ),
         ];
         for (name, size, offsets) in expected {

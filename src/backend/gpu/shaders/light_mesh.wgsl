@@ -23,9 +23,9 @@
 @group(0) @binding(7) var<storage, read_write> direct: array<DirectLight>;
 // Per point, a bit per light that can reach it (`light_mesh_coverage.wgsl`).
 @group(0) @binding(11) var<storage, read> reach: array<u32>;
-// Candidates, interpolation-set sizes, point-to-node segments and
-// fallback points, each as a (low, high) pair of u32.
-@group(0) @binding(14) var<storage, read_write> counts: array<atomic<u32>, 8>;
+// Candidates, interpolation-set sizes, point-to-node segments, fallback
+// points and blocker rays, each as a (low, high) pair of u32.
+@group(0) @binding(14) var<storage, read_write> counts: array<atomic<u32>, 10>;
 
 // Whether the point keeps `node` in its interpolation set: LMM's step 3
 // (the segment from the point to the node is clear), or LMM1's stand-in
@@ -55,10 +55,15 @@ const WEIGHT_BITS: u32 = 12u;
 // `Weights::weight`: the kernel's weight of a node at squared distance
 // `distance_squared`, one rounded operation per step as the CPU does.
 fn node_weight(distance_squared: f32) -> u32 {
+    return node_weight_at(distance_squared, directory.header.inverse_radius_squared);
+}
+
+// The same for a radius whose 1/r² is `inverse_radius_squared`.
+fn node_weight_at(distance_squared: f32, inverse_radius_squared: f32) -> u32 {
     if directory.header.smooth_kernel == 0u {
         return 1u;
     }
-    let falloff = max(1.0 - mul(distance_squared, directory.header.inverse_radius_squared), 0.0);
+    let falloff = max(1.0 - mul(distance_squared, inverse_radius_squared), 0.0);
     return u32(floor(mul(mul(falloff, falloff), 4095.0)));
 }
 
@@ -125,6 +130,129 @@ fn add_count(which: u32, amount: u32) {
     }
 }
 
+// `lightmesh/penumbra.rs`: levels h·2^k for k in [FINEST_LEVEL,
+// COARSEST_LEVEL], their boundaries at √2·2^k of the mesh's radius.
+const FINEST_LEVEL: i32 = -3;
+const COARSEST_LEVEL: i32 = 3;
+const SQRT_2: f32 = 1.41421353816986083984375; // f32::consts::SQRT_2
+const MIN_POSITIVE: f32 = 1.17549435082228750797e-38; // f32::MIN_POSITIVE
+
+// What a light the set disagrees on gets (`interpolate.rs`'s `Share`), or
+// SHARE_FIXED where nothing sizes its penumbra and the mesh's half-ball
+// share stands; and the rays it took.
+const SHARE_FIXED: u32 = 0u;
+const SHARE_FULL: u32 = 1u;
+const SHARE_HIDDEN: u32 = 2u;
+const SHARE_PART: u32 = 3u;
+
+struct BlockerShare {
+    kind: u32,
+    share: f32,
+    rays: u32,
+}
+
+// The first thing on the segment from `start` to the light's `centre`: its
+// distance from `start`, and `start`'s from the centre (`blocker_distance`).
+struct BlockerHit {
+    found: bool,
+    z: f32,
+    distance: f32,
+}
+
+fn blocker_hit(start: vec3<f32>, centre: vec3<f32>) -> BlockerHit {
+    let direction = centre - start;
+    var best = no_hit();
+    walk_static(start, direction, SHADOW_SEGMENT_END, false, &best);
+    walk_dynamic(start, direction, SHADOW_SEGMENT_END, false, &best);
+    if best.mesh == NO_MESH {
+        return BlockerHit(false, 0.0, 0.0);
+    }
+    let distance = root(dot3(direction, direction));
+    return BlockerHit(true, mul(best.t, distance), distance);
+}
+
+// Whether node `a` comes before `b` in coordinates (x, then y, then z).
+fn coordinates_before(a: vec3<i32>, b: vec3<i32>) -> bool {
+    if a.x != b.x {
+        return a.x < b.x;
+    }
+    if a.y != b.y {
+        return a.y < b.y;
+    }
+    return a.z < b.z;
+}
+
+// `LightMesh::blocker_share`: the share of `light` (bit `bit` of word
+// `word`) over the half-ball of the lattice level its penumbra wants at
+// the point, found from the blocker of the centre ray or of the set's
+// nearest blocked node, each level node's segment traced.
+fn blocker_share(point: ShadePoint, ball: HalfBall, origin: vec3<f32>, reach_base: u32, word: u32, bit: u32, light: Light) -> BlockerShare {
+    if light.directional != 0u {
+        return BlockerShare(SHARE_FIXED, 0.0, 0u);
+    }
+    // The set's blocked node nearest the point, ties to the least
+    // coordinates.
+    var found = false;
+    var nearest = vec3<i32>(0);
+    var nearest_distance = 0.0;
+    var nodes = walk(ball);
+    while next_node(&nodes) {
+        let mask = node_mask(nodes.node);
+        if !kept(nodes.node, mask, origin, reach_base) || (visible(mask, word) >> bit & 1u) != 0u {
+            continue;
+        }
+        let closer = nodes.distance_squared < nearest_distance
+            || (nodes.distance_squared == nearest_distance && coordinates_before(nodes.node, nearest));
+        if !found || closer {
+            found = true;
+            nearest = nodes.node;
+            nearest_distance = nodes.distance_squared;
+        }
+    }
+    let nearest_blocked = select(point.position, node_position(nearest), found);
+    var rays = 1u;
+    var blocker = blocker_hit(origin, light.origin);
+    if !blocker.found {
+        rays = 2u;
+        blocker = blocker_hit(nearest_blocked, light.origin);
+    }
+    let hard = select(SHARE_HIDDEN, SHARE_FULL, rays == 2u);
+    if !blocker.found {
+        return BlockerShare(SHARE_FIXED, 0.0, rays);
+    }
+    let radius = div(mul(light.lamp_radius, blocker.z), max(blocker.distance - blocker.z, MIN_POSITIVE));
+    // `penumbra::level`.
+    let steps = div(radius, directory.header.radius);
+    if !(steps >= mul(SQRT_2, ldexp(1.0, FINEST_LEVEL - 1))) {
+        return BlockerShare(hard, 0.0, rays);
+    }
+    var level = COARSEST_LEVEL;
+    for (var k = FINEST_LEVEL; k < COARSEST_LEVEL; k++) {
+        if steps < mul(SQRT_2, ldexp(1.0, k)) {
+            level = k;
+            break;
+        }
+    }
+    let h = mul(directory.header.h, ldexp(1.0, level));
+    let level_radius = mul(directory.header.radius, ldexp(1.0, level));
+    let inverse_radius_squared = div(1.0, mul(level_radius, level_radius));
+    var total = 0u;
+    var seen = 0u;
+    var level_nodes = walk(half_ball_at(point.position, point.geometric_normal, h, level_radius));
+    while next_node(&level_nodes) {
+        let weight = node_weight_at(level_nodes.distance_squared, inverse_radius_squared);
+        total += weight;
+        rays += 1u;
+        if !shadowed(node_position_at(level_nodes.node, h), light) {
+            seen += weight;
+        }
+    }
+    if total == 0u {
+        return BlockerShare(hard, 0.0, rays);
+    }
+    return BlockerShare(SHARE_PART, div(f32(seen), f32(total)), rays);
+}
+
 @compute @workgroup_size(64)
 fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
@@ -145,6 +273,7 @@ fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
     let first = formula_one(point, SHADED_BY_FORMULA_ONE, DirectLight(vec3<f32>(0.0), 0u));
     var radiance = first.radiance;
     var total = 0u;
+    var blocker_rays = 0u;
     for (var word = 0u; word < light_words; word++) {
         let t = tally(ball, origin, reach_base, word);
         if word == 0u {
@@ -172,11 +301,26 @@ fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
             }
             var term = value;
             if (t.all >> bit & 1u) == 0u {
-                term = scale3(value, div(f32(count_of(t, bit)), f32(total)));
+                // The nodes disagree on this light.
+                var share = BlockerShare(SHARE_FIXED, 0.0, 0u);
+                if directory.header.blocker_penumbra != 0u {
+                    share = blocker_share(point, ball, origin, reach_base, word, bit, light);
+                    blocker_rays += share.rays;
+                }
+                if share.kind == SHARE_HIDDEN {
+                    continue;
+                }
+                if share.kind == SHARE_PART {
+                    term = scale3(value, share.share);
+                } else if share.kind == SHARE_FIXED {
+                    term = scale3(value, div(f32(count_of(t, bit)), f32(total)));
+                }
             }
             radiance += term;
             keep_term(light, term);
         }
     }
     direct[index].radiance = radiance;
+    direct[index].shadow_rays += blocker_rays;
+    add_count(4u, blocker_rays);
 }

@@ -15,6 +15,8 @@ struct MeshHeader {
     // The kernel's 1/r² (`kernel::Weights`), and 1 for the smooth kernel.
     inverse_radius_squared: f32,
     smooth_kernel: u32,
+    // 1 where sets are sized by the blocker (`lightmesh/penumbra.rs`).
+    blocker_penumbra: u32,
 }
 
 struct Directory {
@@ -36,46 +38,59 @@ const MAX_SPAN: i32 = 17;
 const ON_PLANE_EPSILONS: f32 = 9.5367431640625e-7;
 
 // The nodes within `radius` of `p` on the side `n` faces, as
-// `Lattice::half_ball` bounds and tests them.
+// `Lattice::half_ball` bounds and tests them, on the mesh's lattice or one
+// of its levels (the same origin, step `h`: `lightmesh/penumbra.rs`).
 struct HalfBall {
     p: vec3<f32>,
     n: vec3<f32>,
+    h: f32,
     low: vec3<i32>,
     span: vec3<i32>,
     radius_squared: f32,
     on_plane: f32,
 }
 
+// The mesh's own half-ball: radius kI·h.
 fn half_ball(p: vec3<f32>, n: vec3<f32>) -> HalfBall {
-    let mesh = directory.header;
-    let h = mesh.h;
-    let from_origin = p - mesh.origin;
+    return half_ball_at(p, n, directory.header.h, directory.header.radius);
+}
+
+// The half-ball of `radius` on the lattice of step `h`.
+fn half_ball_at(p: vec3<f32>, n: vec3<f32>, h: f32, radius: f32) -> HalfBall {
+    let origin = directory.header.origin;
+    let from_origin = p - origin;
     let local = vec3<f32>(div(from_origin.x, h), div(from_origin.y, h), div(from_origin.z, h));
-    let reach_steps = div(mesh.radius, h);
+    let reach_steps = div(radius, h);
     let low = vec3<i32>(ceil(local - vec3<f32>(reach_steps)));
     let high = vec3<i32>(floor(local + vec3<f32>(reach_steps)));
     let span = clamp(high - low + vec3<i32>(1), vec3<i32>(0), vec3<i32>(MAX_SPAN));
     // `Lattice::on_plane_tolerance`: 8 epsilon times the magnitudes.
-    let magnitude = (max_abs(p) + max_abs(mesh.origin)) + mesh.radius;
+    let magnitude = (max_abs(p) + max_abs(origin)) + radius;
     let on_plane = mul(ON_PLANE_EPSILONS, magnitude);
-    return HalfBall(p, n, low, span, mul(mesh.radius, mesh.radius), on_plane);
+    return HalfBall(p, n, h, low, span, mul(radius, radius), on_plane);
 }
 
 fn max_abs(v: vec3<f32>) -> f32 {
     return max(abs(v.x), max(abs(v.y), abs(v.z)));
 }
 
-// `node_position(node)[axis] - p[axis]` as the CPU rounds it.
-fn node_offset(origin: f32, index: i32, p: f32) -> f32 {
-    return (origin + mul(directory.header.h, f32(index))) - p;
+// `node_position(node)[axis] - p[axis]` as the CPU rounds it, on the
+// lattice of step `h`.
+fn node_offset(origin: f32, h: f32, index: i32, p: f32) -> f32 {
+    return (origin + mul(h, f32(index))) - p;
 }
 
 fn node_position(node: vec3<i32>) -> vec3<f32> {
-    let mesh = directory.header;
+    return node_position_at(node, directory.header.h);
+}
+
+// Where `node` of the lattice of step `h` lies.
+fn node_position_at(node: vec3<i32>, h: f32) -> vec3<f32> {
+    let origin = directory.header.origin;
     return vec3<f32>(
-        mesh.origin.x + mul(mesh.h, f32(node.x)),
-        mesh.origin.y + mul(mesh.h, f32(node.y)),
-        mesh.origin.z + mul(mesh.h, f32(node.z)),
+        origin.x + mul(h, f32(node.x)),
+        origin.y + mul(h, f32(node.y)),
+        origin.z + mul(h, f32(node.z)),
     );
 }
 
@@ -194,8 +209,8 @@ fn next_node(w: ptr<function, BallWalk>) -> bool {
             if (*w).at.z >= ball.span.z {
                 return false;
             }
-            let dy = node_offset(origin.y, ball.low.y + (*w).at.y, ball.p.y);
-            let dz = node_offset(origin.z, ball.low.z + (*w).at.z, ball.p.z);
+            let dy = node_offset(origin.y, ball.h, ball.low.y + (*w).at.y, ball.p.y);
+            let dz = node_offset(origin.z, ball.h, ball.low.z + (*w).at.z, ball.p.z);
             (*w).dy2 = mul(dy, dy);
             (*w).dz2 = mul(dz, dz);
             (*w).n_yz = vec2<f32>(mul(ball.n.y, dy), mul(ball.n.z, dz));
@@ -206,7 +221,7 @@ fn next_node(w: ptr<function, BallWalk>) -> bool {
         }
         let i = (*w).at.x;
         (*w).at.x += 1;
-        let dx = node_offset(origin.x, ball.low.x + i, ball.p.x);
+        let dx = node_offset(origin.x, ball.h, ball.low.x + i, ball.p.x);
         let distance_squared = (mul(dx, dx) + (*w).dy2) + (*w).dz2;
         if distance_squared <= ball.radius_squared
             && (mul(ball.n.x, dx) + (*w).n_yz.x) + (*w).n_yz.y > ball.on_plane {

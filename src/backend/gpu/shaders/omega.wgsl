@@ -38,7 +38,9 @@ struct Light {
     // segment (`ShadowSplit`'s role, as `direct.rs`'s `shading_flags`
     // sets the bits below).
     shading: u32,
-    _pad: u32,
+    // The lamp's radius, which sizes its penumbrae
+    // (`lightmesh/penumbra.rs`).
+    lamp_radius: f32,
 }
 
 // Shaded by formula (1) (`whitted`, `auto`'s hard and unshadowed lights).
