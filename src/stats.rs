@@ -29,6 +29,11 @@ impl std::ops::AddAssign for RayCounts {
 pub struct ClassRays([u64; 4]);
 
 impl ClassRays {
+    /// Counts indexed as [`Shadows::ALL`] lists the classes.
+    pub fn new(counts: [u64; 4]) -> ClassRays {
+        ClassRays(counts)
+    }
+
     pub fn add(&mut self, class: Shadows) {
         self.0[class as usize] += 1;
     }

@@ -21,12 +21,14 @@ use super::pass::{Dispatch, WorldUse, BATCH, ITEMS};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::surface::{LevelBuffers, SurfacePoint};
+use crate::plan::Shadows;
 use crate::render::light::RenderLight;
 use crate::render::omega::OmegaLight;
 use crate::render::shadow_split::LightRole;
 use crate::render::surface::ShadingPoint;
 use crate::render::FrameJob;
 use crate::settings::Method;
+use crate::stats::ClassRays;
 
 /// The binding of the frame's lights.
 const LIGHTS: u32 = 10;
@@ -36,6 +38,9 @@ const LIGHTS: u32 = 10;
 const SHADED_BY_FORMULA_ONE: u32 = 1;
 const SHADED_BY_LIGHT_MESH: u32 = 2;
 const TESTS_SEGMENT: u32 = 4;
+/// Where the plan's class of the light sits (two bits, its index in
+/// [`Shadows::ALL`]), for counting shadow rays by class.
+const CLASS_SHIFT: u32 = 3;
 
 /// Each of `job`'s lights' `shading` bits under `method`: its role in the
 /// frame's [`ShadowSplit`](crate::render::shadow_split::ShadowSplit), so
@@ -50,11 +55,13 @@ pub fn shading_flags(job: &FrameJob, method: Method) -> Vec<u32> {
                 true => TESTS_SEGMENT,
                 false => 0,
             };
-            match shadows.role(method, index, lights) {
+            let class = (shadows.class(index, lights) as u32) << CLASS_SHIFT;
+            let integrator = match shadows.role(method, index, lights) {
                 LightRole::FormulaOne { .. } => SHADED_BY_FORMULA_ONE | segment,
                 LightRole::LightMesh => SHADED_BY_LIGHT_MESH | segment,
                 LightRole::Off | LightRole::Lamp => 0,
-            }
+            };
+            integrator | class
         })
         .collect()
 }
@@ -104,20 +111,27 @@ impl FlatLight {
     }
 }
 
-/// `direct_light.wgsl`'s `DirectLight`: one point's answer.
+/// `formula_one.wgsl`'s `DirectLight`: one point's answer.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct DirectLight {
     radiance: [f32; 3],
-    shadow_rays: u32,
+    /// Segments of no light's class: LMM's point-to-node tests and the
+    /// rays that found penumbrae's blockers.
+    other_rays: u32,
+    /// Formula (1)'s shadow rays and lamp samples, by the plan's class of
+    /// their light (as [`Shadows::ALL`] lists them).
+    class_rays: [u32; 4],
 }
 
 impl DirectLight {
-    /// A point's direct light made on the CPU (`--method area`).
-    pub fn new(radiance: Vec3, shadow_rays: u32) -> DirectLight {
+    /// A point's direct light made on the CPU (`--method area`), with its
+    /// lamp samples' rays by class.
+    pub fn new(radiance: Vec3, rays: ClassRays) -> DirectLight {
         DirectLight {
             radiance: radiance.to_array(),
-            shadow_rays,
+            other_rays: 0,
+            class_rays: Shadows::ALL.map(|class| rays.of(class) as u32),
         }
     }
 
@@ -126,7 +140,7 @@ impl DirectLight {
     }
 
     pub fn shadow_rays(&self) -> u64 {
-        self.shadow_rays as u64
+        self.other_rays as u64 + self.class_rays.iter().map(|&rays| rays as u64).sum::<u64>()
     }
 }
 

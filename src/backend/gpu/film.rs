@@ -13,6 +13,7 @@ use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::surface::LevelBuffers;
 use crate::render::environment::Environment;
+use crate::stats::ClassRays;
 
 /// The direct light of a level's points, for the accumulation.
 const DIRECT: u32 = 10;
@@ -76,7 +77,11 @@ pub struct Film {
 pub struct Developed {
     pub pixels: Vec<Vec4>,
     pub shading_points: u64,
-    pub shadow_rays: u64,
+    /// Segments of no light's class (LMM's point-to-node tests, the
+    /// blockers' rays).
+    pub other_rays: u64,
+    /// Formula (1)'s shadow rays and lamp samples by class.
+    pub class_rays: ClassRays,
 }
 
 impl Film {
@@ -91,7 +96,7 @@ impl Film {
         let environment = EnvironmentRecord::from(environment);
         Ok(Film {
             samples: answer_buffer::<[f32; 4]>(context, "pixel samples", pixels * spp)?,
-            counters: answer_buffer::<[u32; 2]>(context, "counters", 1)?,
+            counters: answer_buffer::<[u32; 6]>(context, "counters", 1)?,
             environment: storage(context, "environment", &[environment])?,
             pixels,
         })
@@ -148,13 +153,14 @@ impl Film {
         );
         let pixels: Vec<[f32; 4]> = read_back(context, encoder, &pixels, count)?;
         let encoder = context.device.create_command_encoder(&Default::default());
-        let [counters]: [[u32; 2]; 1] = read_back(context, encoder, &self.counters, 1)?
+        let [counters]: [[u32; 6]; 1] = read_back(context, encoder, &self.counters, 1)?
             .try_into()
             .map_err(|_| GpuError::Readback("no counters".into()))?;
         Ok(Developed {
             pixels: pixels.into_iter().map(Vec4::from_array).collect(),
             shading_points: counters[0] as u64,
-            shadow_rays: counters[1] as u64,
+            other_rays: counters[1] as u64,
+            class_rays: ClassRays::new([2, 3, 4, 5].map(|at| counters[at] as u64)),
         })
     }
 }

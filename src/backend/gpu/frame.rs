@@ -31,7 +31,7 @@ use crate::backend::sampling::lamp_sample;
 use crate::backend::RenderError;
 use crate::render::surface::ShadingPoint;
 use crate::render::{area, FrameJob};
-use crate::stats::FrameStats;
+use crate::stats::{ClassRays, FrameStats};
 
 /// Points whose lamp samples go to the GPU together (`--method area`): at
 /// 64 lights, about a million segments.
@@ -127,7 +127,8 @@ impl Frame<'_> {
 
             let start = Instant::now();
             let developed = film.develop(&self.pipelines.film, context, self.scene)?;
-            stats.rays.shadow += developed.shadow_rays;
+            stats.rays.shadow += developed.other_rays + developed.class_rays.total();
+            stats.shadow_classes.add_rays(developed.class_rays);
             stats.shading_points += developed.shading_points;
             let samples = match &aov_film {
                 Some(aov_film) => Some(aov_film.develop(context)?),
@@ -319,7 +320,11 @@ impl Frame<'_> {
                         }
                     }
                 }
-                direct.push(DirectLight::new(radiance, point_samples.rays.len() as u32));
+                let mut rays = ClassRays::default();
+                for &light in &point_samples.lights {
+                    rays.add(job.shadows.class(light, &job.frame.lights));
+                }
+                direct.push(DirectLight::new(radiance, rays));
                 if let (Some(layers), Some(sums)) = (&mut layers, sums) {
                     layers.extend(sums.into_iter().map(|sum| sum.extend(0.0).to_array()));
                 }

@@ -350,7 +350,7 @@ mod tests {
                 size_of::<FlatLight>(),
                 vec![0, 12, 16, 28, 32, 44, 48, 52, 56, 60],
             ),
-            ("DirectLight", size_of::<DirectLight>(), vec![0, 12]),
+            ("DirectLight", size_of::<DirectLight>(), vec![0, 12, 16]),
             ("FirstHit", size_of::<FirstHitRecord>(), vec![0, 12, 16, 28]),
             (
                 "Environment",

@@ -8,17 +8,20 @@
 // the shadow segments are counted (integer atomics: any order gives the
 // same count).
 
+// `formula_one.wgsl`'s.
 struct DirectLight {
     radiance: vec3<f32>,
-    shadow_rays: u32,
+    other_rays: u32,
+    class_rays: vec4<u32>,
 }
 
 @group(0) @binding(1) var<storage, read> points: array<SurfacePoint>;
 @group(0) @binding(10) var<storage, read> direct: array<DirectLight>;
 // Per sample of the band: radiance, and 1 in w where a camera ray hit.
 @group(0) @binding(7) var<storage, read_write> samples: array<vec4<f32>>;
-// Shading points, then shadow segments.
-@group(0) @binding(18) var<storage, read_write> counters: array<atomic<u32>, 2>;
+// Shading points, the segments of no light's class, then formula (1)'s
+// shadow rays for each class of light.
+@group(0) @binding(18) var<storage, read_write> counters: array<atomic<u32>, 6>;
 
 @compute @workgroup_size(64)
 fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -29,7 +32,8 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
     let sample = points[index].sample;
     var value = samples[sample];
     var hits = 0u;
-    var shadow_rays = 0u;
+    var other_rays = 0u;
+    var class_rays = vec4<u32>(0u);
     for (var i = index; i < params.item_count && points[i].sample == sample; i++) {
         let point = points[i];
         if point.hit == 0u {
@@ -39,9 +43,13 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
         let shaded = unlit(point) + light.radiance;
         value = vec4<f32>(value.xyz + mul3(point.weight, shaded), select(value.w, 1.0, point.depth == 0u));
         hits += 1u;
-        shadow_rays += light.shadow_rays;
+        other_rays += light.other_rays;
+        class_rays += light.class_rays;
     }
     samples[sample] = value;
     atomicAdd(&counters[0], hits);
-    atomicAdd(&counters[1], shadow_rays);
+    atomicAdd(&counters[1], other_rays);
+    for (var shadow_class = 0u; shadow_class < 4u; shadow_class++) {
+        atomicAdd(&counters[2u + shadow_class], class_rays[shadow_class]);
+    }
 }

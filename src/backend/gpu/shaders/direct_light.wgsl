@@ -11,10 +11,9 @@ fn direct_light(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let surface = points[index];
     if surface.hit == 0u {
-        direct[index] = DirectLight(vec3<f32>(0.0), 0u);
+        direct[index] = no_direct_light();
         return;
     }
     begin_terms(index);
-    let none = DirectLight(vec3<f32>(0.0), 0u);
-    direct[index] = formula_one(shade_point(surface), SHADED_BY_FORMULA_ONE, none);
+    direct[index] = formula_one(shade_point(surface), SHADED_BY_FORMULA_ONE, no_direct_light());
 }

@@ -6,9 +6,17 @@
 // `light` AOV's, or nothing). A point gets the CPU backend's bits wherever
 // its shadow segments get its answers.
 
+// One point's direct light, and the segments it took: those of no
+// light's class (LMM's point-to-node tests, the blockers' rays), and
+// formula (1)'s by the plan's class of their light.
 struct DirectLight {
     radiance: vec3<f32>,
-    shadow_rays: u32,
+    other_rays: u32,
+    class_rays: vec4<u32>,
+}
+
+fn no_direct_light() -> DirectLight {
+    return DirectLight(vec3<f32>(0.0), 0u, vec4<u32>(0u));
 }
 
 // Where shadow segments stop short of the light (`render/light.rs`).
@@ -51,7 +59,7 @@ fn segment_blocked(origin: vec3<f32>, direction: vec3<f32>, t_max: f32) -> bool 
 fn formula_one(point: ShadePoint, shading: u32, sum: DirectLight) -> DirectLight {
     let origin = offset_ray_origin(point.position, point.geometric_normal);
     var radiance = sum.radiance;
-    var shadow_rays = sum.shadow_rays;
+    var class_rays = sum.class_rays;
     for (var first = 0u; first < params.light_count; first += 32u) {
         let count = min(params.light_count - first, 32u);
         var bringing = 0u;
@@ -65,17 +73,20 @@ fn formula_one(point: ShadePoint, shading: u32, sum: DirectLight) -> DirectLight
                 }
             }
         }
-        shadow_rays += countOneBits(tested);
         while bringing != 0u {
             let bit = firstTrailingBit(bringing);
             let light = lights[first + bit];
             bringing &= bringing - 1u;
-            if (tested >> bit & 1u) == 0u || !shadowed(origin, light) {
+            let tests = (tested >> bit & 1u) != 0u;
+            if tests {
+                class_rays[class_of(light)] += 1u;
+            }
+            if !tests || !shadowed(origin, light) {
                 let term = omega(point, light);
                 radiance += term;
                 keep_term(light, term);
             }
         }
     }
-    return DirectLight(radiance, shadow_rays);
+    return DirectLight(radiance, sum.other_rays, class_rays);
 }

@@ -261,7 +261,7 @@ fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let surface = points[index];
     if surface.hit == 0u {
-        direct[index] = DirectLight(vec3<f32>(0.0), 0u);
+        direct[index] = no_direct_light();
         return;
     }
     begin_terms(index);
@@ -270,7 +270,7 @@ fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
     let origin = offset_ray_origin(point.position, point.geometric_normal);
     let light_words = directory.header.light_words;
     let reach_base = index * light_words;
-    let first = formula_one(point, SHADED_BY_FORMULA_ONE, DirectLight(vec3<f32>(0.0), 0u));
+    let first = formula_one(point, SHADED_BY_FORMULA_ONE, no_direct_light());
     var radiance = first.radiance;
     var total = 0u;
     var blocker_rays = 0u;
@@ -285,10 +285,11 @@ fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
             if total == 0u {
                 add_count(3u, 1u);
                 let fallback = formula_one(point, SHADED_BY_LIGHT_MESH, first);
-                direct[index] = DirectLight(fallback.radiance, fallback.shadow_rays + tests);
+                direct[index] = DirectLight(fallback.radiance, tests, fallback.class_rays);
                 return;
             }
-            direct[index].shadow_rays = first.shadow_rays + tests;
+            direct[index].other_rays = tests;
+            direct[index].class_rays = first.class_rays;
         }
         var lit = t.any;
         while lit != 0u {
@@ -321,6 +322,6 @@ fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     direct[index].radiance = radiance;
-    direct[index].shadow_rays += blocker_rays;
+    direct[index].other_rays += blocker_rays;
     add_count(4u, blocker_rays);
 }

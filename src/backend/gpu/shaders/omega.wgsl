@@ -49,6 +49,13 @@ const SHADED_BY_FORMULA_ONE: u32 = 1u;
 const SHADED_BY_LIGHT_MESH: u32 = 2u;
 // Formula (1) tests its shadow segment: every light but an unshadowed one.
 const TESTS_SEGMENT: u32 = 4u;
+// Bits 3–4: the plan's class of the light (none, unshadowed, hard, soft),
+// which its shadow rays are counted under.
+const CLASS_SHIFT: u32 = 3u;
+
+fn class_of(light: Light) -> u32 {
+    return light.shading >> CLASS_SHIFT & 3u;
+}
 
 @group(0) @binding(10) var<storage, read> lights: array<Light>;
 
