@@ -465,9 +465,11 @@ fn plan_json_names_each_light_object_and_material() {
 
 #[test]
 fn the_gpu_follows_the_plan() {
-    let Ok(mut gpu) = Backend::new(BackendKind::Gpu, Some(2)) else {
+    let Some(gpu) = common::gpu::backend() else {
         return;
     };
+    let exact = gpu.rounds_as_the_cpu();
+    let mut gpu = Backend::Gpu(Box::new(gpu));
     let small = |method| {
         let mut settings = base_settings(method);
         settings.width = 24;
@@ -502,7 +504,7 @@ fn the_gpu_follows_the_plan() {
         assert!(stats.shadow_classes.hard.shadow_rays > 0);
         assert_eq!(stats.shadow_classes.hard.mask_bits, 0);
         assert_eq!(stats.shadow_classes.none, Default::default());
-        if gpu_rounds_as_cpu() {
+        if exact {
             let differing = (frame.image.pixels.iter().zip(&cpu.image.pixels))
                 .filter(|(gpu, cpu)| gpu != cpu)
                 .count();
@@ -536,8 +538,4 @@ fn the_gpu_follows_the_plan() {
         layer(&auto, "light.soft.R"),
         layer(&whitted, "light.soft.R")
     );
-}
-
-fn gpu_rounds_as_cpu() -> bool {
-    lmanim::backend::GpuBackend::new(Some(1)).is_ok_and(|gpu| gpu.rounds_as_the_cpu())
 }

@@ -11,12 +11,11 @@ mod common;
 
 use common::*;
 use glam::{DMat4, DQuat, DVec3, Vec3};
-use lmanim::backend::{Backend, GpuBackend};
+use lmanim::backend::Backend;
 use lmanim::lightmesh::penumbra::Penumbra;
 use lmanim::output::Image;
 use lmanim::scene::{Projection, SceneDesc};
-use lmanim::sequence::Sequence;
-use lmanim::settings::{BackendKind, Method, Settings};
+use lmanim::settings::{Method, Settings};
 use lmanim::stats::FrameStats;
 
 /// Pixels along the row, the metres between neighbours, and where the row
@@ -144,27 +143,23 @@ fn points_whose_nodes_agree_trace_nothing_and_keep_their_bits() {
 
 #[test]
 fn the_gpu_backend_sizes_penumbrae_as_the_cpu_does() {
-    let Ok(mut gpu) = Backend::new(BackendKind::Gpu, Some(2)) else {
+    let Some(gpu) = common::gpu::backend() else {
         return;
     };
+    let exact = gpu.rounds_as_the_cpu();
+    let mut gpu = Backend::Gpu(Box::new(gpu));
     // Half the row, about the middle (lavapipe is slow): the umbra's end
     // and the far penumbra.
     for method in [Method::Lmm1, Method::Lmm] {
         let mut settings = row_settings(method, Penumbra::Blocker, 1);
         settings.width = PIXELS / 2;
         let (cpu, cpu_stats) = render_with_stats(wall_scene(true), &settings);
-        settings.backend = BackendKind::Gpu;
-        let mut sequence = Sequence::new(wall_scene(true), "wall".into()).unwrap();
-        let mut stats = FrameStats::default();
-        let placed = sequence.advance(0.0, &settings, &mut stats).unwrap();
-        let frame = sequence
-            .render_frame(&mut gpu, &placed, &settings, &mut stats)
-            .unwrap();
+        let (image, stats) = render_on(&mut gpu, wall_scene(true), &settings);
         let rays = |stats: &FrameStats| stats.lightmesh.unwrap().blocker_rays;
         assert!(rays(&cpu_stats) > 0);
         assert_eq!(rays(&stats), rays(&cpu_stats), "{method}");
-        if GpuBackend::new(Some(1)).is_ok_and(|gpu| gpu.rounds_as_the_cpu()) {
-            let differing = (frame.image.pixels.iter().zip(&cpu.pixels))
+        if exact {
+            let differing = (image.pixels.iter().zip(&cpu.pixels))
                 .filter(|(gpu, cpu)| gpu != cpu)
                 .count();
             assert_eq!(differing, 0, "{method}: pixels differing from the CPU's");
