@@ -34,7 +34,8 @@ pub struct PointCounts {
     pub interp_set: u64,
     pub p2n_tests: u64,
     pub fallback: u64,
-    /// Closest-hit rays that found a light's blocker (`penumbra: blocker`).
+    /// Rays of `penumbra: blocker`: those that found a light's blocker
+    /// and the segments of a lattice level's nodes.
     pub blocker_rays: u64,
     /// Plain shadow rays (formula (1), lamp samples), by light class.
     pub shadow_rays: ClassRays,

@@ -85,22 +85,18 @@ pub fn estimate(
         LightSource::Point { position } | LightSource::Spot { position, .. } => position,
         LightSource::Directional { .. } => return None,
     };
-    let centre_ray = light.shadow_ray(origin);
-    let (blocker, rays) = match blocker_distance(&centre_ray, centre, world) {
-        Some(found) => (Some(found), 1),
-        None => {
-            let node_ray = light.shadow_ray(nearest_blocked);
-            (blocker_distance(&node_ray, centre, world), 2)
-        }
-    };
+    let centre_blocker = blocker_distance(&light.shadow_ray(origin), centre, world);
+    let centre_visible = centre_blocker.is_none();
     // A blocked node whose own segment is found clear can only be one the
     // dynamic layer marked, since moved away: nothing to size by.
+    let blocker = centre_blocker
+        .or_else(|| blocker_distance(&light.shadow_ray(nearest_blocked), centre, world));
     let radius =
         blocker.map(|(z, distance)| light.lamp_radius * z / (distance - z).max(f32::MIN_POSITIVE));
     Some(BlockerEstimate {
         radius,
-        centre_visible: rays == 2,
-        rays,
+        centre_visible,
+        rays: 1 + centre_visible as u64,
     })
 }
 
@@ -126,7 +122,7 @@ pub fn level(mesh_lattice: Lattice, ki: f32, radius: f32) -> Option<Lattice> {
 }
 
 /// 2^`exponent`, exactly (from its bits: `exp2` need not be exact).
-pub fn power_of_two(exponent: i32) -> f32 {
+fn power_of_two(exponent: i32) -> f32 {
     f32::from_bits(((127 + exponent) as u32) << 23)
 }
 

@@ -210,13 +210,13 @@ fn blocker_share(point: ShadePoint, ball: HalfBall, origin: vec3<f32>, reach_bas
         }
     }
     let nearest_blocked = select(point.position, node_position(nearest), found);
-    var rays = 1u;
     var blocker = blocker_hit(origin, light.origin);
-    if !blocker.found {
-        rays = 2u;
+    let centre_visible = !blocker.found;
+    if centre_visible {
         blocker = blocker_hit(nearest_blocked, light.origin);
     }
-    let hard = select(SHARE_HIDDEN, SHARE_FULL, rays == 2u);
+    var rays = select(1u, 2u, centre_visible);
+    let hard = select(SHARE_HIDDEN, SHARE_FULL, centre_visible);
     if !blocker.found {
         return BlockerShare(SHARE_FIXED, 0.0, rays);
     }

@@ -34,9 +34,9 @@ struct Light {
     cos_inner: f32,
     // Its layer of the `light` AOV (`light_layers.wgsl`).
     layer: u32,
-    // Which integrator shades it and whether formula (1) tests its
-    // segment (`ShadowSplit`'s role, as `direct.rs`'s `shading_flags`
-    // sets the bits below).
+    // Which integrator shades it, whether formula (1) tests its segment,
+    // and the plan's class of the light (`ShadowSplit`, as `direct.rs`'s
+    // `shading_flags` sets the bits below).
     shading: u32,
     // The lamp's radius, which sizes its penumbrae
     // (`lightmesh/penumbra.rs`).
