@@ -194,8 +194,8 @@ struct RenderArgs {
     #[arg(long, value_enum)]
     kernel: Option<Kernel>,
     /// How wide each light's set is where its nodes disagree: fixed (kI·h,
-    /// the paper) or blocker (from the blocker's distance) [default:
-    /// fixed].
+    /// the paper) or blocker (from the lamp's radius and the blocker's
+    /// distance) [default: blocker].
     #[arg(long, value_enum)]
     penumbra: Option<Penumbra>,
     /// Also write a tone-mapped sRGB PNG preview beside each frame.

@@ -6,10 +6,13 @@ mod common;
 
 use common::*;
 use glam::{DMat4, DQuat, DVec3, Vec3};
+use lmanim::backend::Backend;
 use lmanim::lightmesh::kernel::Kernel;
+use lmanim::lightmesh::penumbra::Penumbra;
 use lmanim::lightmesh::LightMeshStats;
 use lmanim::output::Image;
 use lmanim::scene::{LightKind, SceneDesc};
+use lmanim::sequence::Sequence;
 use lmanim::settings::{Method, Settings};
 
 fn with_method(mut settings: Settings, method: Method, h: f32, ki: f32) -> Settings {
@@ -407,6 +410,58 @@ fn more_than_a_hundred_lights_use_several_mask_words() {
         image.pixels.iter().map(|p| p.x as f64).sum::<f64>() / image.pixels.len() as f64
     };
     assert!((mean(&lmm) - mean(&whitted)).abs() / mean(&whitted) < 0.05);
+}
+
+/// The many-light floor with lamps of 5 cm, whose penumbrae `blocker`
+/// sizes: where a point's set disagrees on a lamp, its nearest blocked
+/// node is sought and its level's nodes traced, for every such lamp.
+/// With 40 lamps the GPU's frame is the CPU's on every adapter. With 130
+/// a point can need more loop iterations than lavapipe (Mesa 22.3) runs
+/// in one invocation: it ends every loop after 65,535 of them, silently,
+/// and its frame lost lamps the CPU's kept. The shader notices and the
+/// frame is refused with an error that says so; a hardware adapter has
+/// no such budget and must match.
+#[test]
+fn many_lamps_sized_by_their_blockers_give_the_cpus_frame_on_the_gpu() {
+    for lamps in [40, 130] {
+        let mut scene = lit_floor();
+        let m = add_material(&mut scene, lambert(Vec3::splat(0.5)));
+        add_quads(&mut scene, &[floor_quad(0.5, 0.3)], 1, m);
+        for i in 0..lamps {
+            let angle = i as f32 * 0.37;
+            let height = 1.5 + (i % 7) as f32 * 0.2;
+            add_lamp(
+                &mut scene,
+                0.5,
+                Vec3::new(angle.cos() * 2.0, height, angle.sin() * 2.0),
+                0.05,
+            );
+        }
+        let mut settings = with_method(settings(32, 32), Method::Lmm, 0.05, 2.5);
+        settings.lightmesh.penumbra = Penumbra::Blocker;
+        let (on_cpu, stats) = lightmesh_stats(scene.clone(), &settings);
+        assert!(stats.blocker_rays > 0, "lamps were sized by their blockers");
+        let Some(gpu) = gpu::backend() else { return };
+        let (exact, software) = (gpu.rounds_as_the_cpu(), gpu.is_software());
+        let mut backend = Backend::Gpu(Box::new(gpu));
+        let mut sequence = Sequence::new(scene, "lamps.gltf".into()).expect("scene");
+        let placed = sequence.place(&settings).expect("camera");
+        match sequence.render(&mut backend, &placed, &settings, &mut Default::default()) {
+            Ok(on_gpu) if exact => {
+                assert!(on_gpu == on_cpu, "{lamps} lamps: the GPU's frame differs")
+            }
+            Ok(on_gpu) => assert!(on_gpu.pixels.iter().all(|p| p.is_finite())),
+            Err(error) => {
+                assert!(lamps > 40 && software, "{lamps} lamps: {error}");
+                assert!(
+                    error
+                        .to_string()
+                        .contains("cut the light mesh's shader loops short"),
+                    "{error}"
+                );
+            }
+        }
+    }
 }
 
 #[test]

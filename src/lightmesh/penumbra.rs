@@ -47,10 +47,11 @@ use crate::render::light::{LightSource, RenderLight};
 #[serde(rename_all = "lowercase")]
 pub enum Penumbra {
     /// The paper's: one radius kI·h for every light and point.
-    #[default]
     Fixed,
-    /// Each light's radius from the distance to its blocker, where the
-    /// nodes disagree on it.
+    /// Each lamp's radius from the distance to its blocker, where the
+    /// nodes disagree on it (closer to a real lamp on every scene of
+    /// STUDY.md); lights without a lamp radius keep kI·h.
+    #[default]
     Blocker,
 }
 
@@ -73,8 +74,11 @@ pub struct BlockerEstimate {
 
 /// The physical penumbra radius of `light` at the point whose ray origin
 /// is `origin`, for a set whose blocked node nearest the point lies at
-/// `nearest_blocked`. Returns `None` for a light without a position (a
-/// directional light has no lamp to size a penumbra by).
+/// `nearest_blocked`. Returns `None` for a light without a lamp to size a
+/// penumbra by: a directional light, or a point light of radius 0, whose
+/// shadow the light mesh softens by kI·h alone, as the paper does (a
+/// physical radius of 0 would draw it hard, which is Whitted's shadow at
+/// the light mesh's cost).
 pub fn estimate(
     origin: Vec3,
     light: &RenderLight,
@@ -85,6 +89,9 @@ pub fn estimate(
         LightSource::Point { position } | LightSource::Spot { position, .. } => position,
         LightSource::Directional { .. } => return None,
     };
+    if light.lamp_radius <= 0.0 {
+        return None;
+    }
     let centre_blocker = blocker_distance(&light.shadow_ray(origin), centre, world);
     let centre_visible = centre_blocker.is_none();
     // A blocked node whose own segment is found clear can only be one the

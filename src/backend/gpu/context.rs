@@ -38,6 +38,10 @@ pub enum GpuError {
         depth: usize,
         limit: usize,
     },
+    /// The adapter ended shader loops early (lavapipe's budget of 65,535
+    /// loop iterations per invocation): its frame would be wrong.
+    #[error("--backend gpu: the adapter '{adapter}' cut the light mesh's shader loops short at {points} points (it ends loops after a fixed number of iterations); render this frame with --backend cpu, or lighten each point's work (--penumbra fixed traces no rays per lamp)")]
+    LoopsCutShort { adapter: String, points: u32 },
     #[error("--backend gpu: reading results back failed: {0}")]
     Readback(String),
     /// The device refused work (out of memory, or a limit the checks

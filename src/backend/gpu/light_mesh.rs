@@ -19,7 +19,7 @@ use std::time::Instant;
 
 use glam::IVec3;
 
-use super::context::GpuContext;
+use super::context::{GpuContext, GpuError};
 use super::direct::FrameLights;
 use super::fill::FillPass;
 use super::layered::{LayeredPass, PointLayers};
@@ -48,6 +48,11 @@ const POOL: u32 = 13;
 const COUNTS: u32 = 14;
 const FLAGS: u32 = 15;
 const GATHER_SOURCE: u32 = 10;
+
+/// Formula (2)'s counters: five (low, high) pairs of [`PointCounts`], then
+/// the points whose loops the adapter cut short (`light_mesh.wgsl`).
+const COUNTERS: usize = 11;
+const LOOPS_CUT_SHORT: usize = 10;
 
 /// The light mesh's pipelines, made once per run: coverage (which points
 /// the pool serves), gathering the points it does not, and formula (2).
@@ -96,7 +101,8 @@ pub struct LightMeshShading<'m> {
     lanes: LightLanes,
     /// What demand, fill and enclosure did.
     work: LightMeshStats,
-    /// The shader's counters ([`PointCounts`] as (low, high) pairs).
+    /// The shader's counters ([`PointCounts`] as (low, high) pairs, then
+    /// the points whose loops the adapter cut short).
     counts: wgpu::Buffer,
 }
 
@@ -121,7 +127,7 @@ impl<'m> LightMeshShading<'m> {
             point_to_node_tests: method.tests_point_to_node(),
             lanes: (job.shadows).lanes(method, lights, |role| role == LightRole::LightMesh),
             work: LightMeshStats::default(),
-            counts: answer_buffer::<[u32; 10]>(context, "light-mesh counters", 1)?,
+            counts: answer_buffer::<[u32; COUNTERS]>(context, "light-mesh counters", 1)?,
         })
     }
 
@@ -268,9 +274,17 @@ impl<'m> LightMeshShading<'m> {
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
         let encoder = context.device.create_command_encoder(&Default::default());
-        let [counts]: [[u32; 10]; 1] = read_back(context, encoder, &self.counts, 1)?
+        let [counts]: [[u32; COUNTERS]; 1] = read_back(context, encoder, &self.counts, 1)?
             .try_into()
             .expect("one counter record was read");
+        let points = counts[LOOPS_CUT_SHORT];
+        if points > 0 {
+            return Err(GpuError::LoopsCutShort {
+                adapter: context.info.name.clone(),
+                points,
+            }
+            .into());
+        }
         let pair = |at: usize| counts[2 * at] as u64 | (counts[2 * at + 1] as u64) << 32;
         let counts = PointCounts {
             candidates: pair(0),

@@ -155,6 +155,13 @@ impl GpuBackend {
         self.context.exact
     }
 
+    /// Whether the adapter is a CPU (lavapipe, WARP, SwiftShader): its
+    /// timings say nothing of a GPU's, and lavapipe cuts long shader loops
+    /// short ([`GpuError::LoopsCutShort`]).
+    pub fn is_software(&self) -> bool {
+        self.context.is_software()
+    }
+
     /// The adapter's name, backend and driver, for the user.
     pub fn adapter(&self) -> String {
         self.context.to_string()

@@ -24,8 +24,10 @@
 // Per point, a bit per light that can reach it (`light_mesh_coverage.wgsl`).
 @group(0) @binding(11) var<storage, read> reach: array<u32>;
 // Candidates, interpolation-set sizes, point-to-node segments, fallback
-// points and blocker rays, each as a (low, high) pair of u32.
-@group(0) @binding(14) var<storage, read_write> counts: array<atomic<u32>, 10>;
+// points and blocker rays, each as a (low, high) pair of u32; then the
+// points whose loops the adapter cut short.
+@group(0) @binding(14) var<storage, read_write> counts: array<atomic<u32>, 11>;
+const LOOPS_CUT_SHORT: u32 = 10u;
 
 // Whether the point keeps `node` in its interpolation set: LMM's step 3
 // (the segment from the point to the node is clear), or LMM1's stand-in
@@ -44,6 +46,34 @@ fn kept(node: vec3<i32>, mask: NodeMask, origin: vec3<f32>, reach_base: u32) -> 
         }
     }
     return true;
+}
+
+// Which of the point's candidates it keeps, a bit per candidate in walk
+// order: settled once per point, then read by every walk over its
+// half-ball (one tally per 32 lights, and the blocker's search for the
+// nearest blocked node of each light the set disagrees on), so each
+// point-to-node segment is traced once, not once per walk. A half-ball
+// has at most MAX_SPAN³ candidates.
+const KEPT_WORDS: u32 = 154u; // ⌈17³ / 32⌉
+var<private> kept_bits: array<u32, KEPT_WORDS>;
+
+fn settle_kept(ball: HalfBall, origin: vec3<f32>, reach_base: u32) {
+    var place = 0u;
+    var nodes = walk(ball);
+    while next_node(&nodes) {
+        let bit = 1u << (place % 32u);
+        if kept(nodes.node, node_mask(nodes.node), origin, reach_base) {
+            kept_bits[place / 32u] |= bit;
+        } else {
+            kept_bits[place / 32u] &= ~bit;
+        }
+        place += 1u;
+    }
+}
+
+// Whether the candidate at `place` in walk order is kept.
+fn is_kept(place: u32) -> bool {
+    return (kept_bits[place / 32u] >> (place % 32u) & 1u) == 1u;
 }
 
 // Bits of the per-light counters: a half-ball of at most `MAX_KI` steps
@@ -80,17 +110,17 @@ struct Tally {
     counters: array<u32, COUNTER_BITS>,
 }
 
-fn tally(ball: HalfBall, origin: vec3<f32>, reach_base: u32, word: u32) -> Tally {
+fn tally(ball: HalfBall, reach_base: u32, word: u32) -> Tally {
     let wanted = reach[reach_base + word];
     var t = Tally(0u, 0u, 0u, wanted, 0u, array<u32, COUNTER_BITS>());
     var nodes = walk(ball);
     while next_node(&nodes) {
+        let place = t.candidates;
         t.candidates += 1u;
-        let node = nodes.node;
-        let mask = node_mask(node);
-        if !kept(node, mask, origin, reach_base) {
+        if !is_kept(place) {
             continue;
         }
+        let mask = node_mask(nodes.node);
         t.kept += 1u;
         let weight = node_weight(nodes.distance_squared);
         t.total += weight;
@@ -186,8 +216,8 @@ fn coordinates_before(a: vec3<i32>, b: vec3<i32>) -> bool {
 // `word`) over the half-ball of the lattice level its penumbra wants at
 // the point, found from the blocker of the centre ray or of the set's
 // nearest blocked node, each level node's segment traced.
-fn blocker_share(point: ShadePoint, ball: HalfBall, origin: vec3<f32>, reach_base: u32, word: u32, bit: u32, light: Light) -> BlockerShare {
-    if light.directional != 0u {
+fn blocker_share(point: ShadePoint, ball: HalfBall, origin: vec3<f32>, word: u32, bit: u32, light: Light) -> BlockerShare {
+    if light.directional != 0u || light.lamp_radius <= 0.0 {
         return BlockerShare(SHARE_FIXED, 0.0, 0u);
     }
     // The set's blocked node nearest the point, ties to the least
@@ -195,10 +225,12 @@ fn blocker_share(point: ShadePoint, ball: HalfBall, origin: vec3<f32>, reach_bas
     var found = false;
     var nearest = vec3<i32>(0);
     var nearest_distance = 0.0;
+    var place = 0u;
     var nodes = walk(ball);
     while next_node(&nodes) {
-        let mask = node_mask(nodes.node);
-        if !kept(nodes.node, mask, origin, reach_base) || (visible(mask, word) >> bit & 1u) != 0u {
+        let here = place;
+        place += 1u;
+        if !is_kept(here) || (visible(node_mask(nodes.node), word) >> bit & 1u) != 0u {
             continue;
         }
         let closer = nodes.distance_squared < nearest_distance
@@ -259,6 +291,30 @@ fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
     if index >= params.item_count {
         return;
     }
+    shade(index);
+    if loops_were_cut_short() {
+        atomicAdd(&counts[LOOPS_CUT_SHORT], 1u);
+    }
+}
+
+// lavapipe (Mesa 22.3's gallivm) ends every loop of an invocation once
+// 65,535 loop iterations have run in it (LP_MAX_TGSI_LOOP_ITERATIONS,
+// counted over its vector of eight invocations), silently; every loop
+// after that runs once. A point's formula (2) with many lamps sized by
+// their blockers can pass that. A loop of at least two trips, its count
+// unknown to the compiler, runs once only after the budget is spent:
+// then the frame is refused instead of shaded wrong.
+fn loops_were_cut_short() -> bool {
+    let trips = directory.header.light_words + 1u;
+    var ran = 0u;
+    for (var trip = 0u; trip < trips; trip++) {
+        ran += 1u;
+    }
+    return ran != trips;
+}
+
+// Formula (2), or formula (1) where the set is empty, at point `index`.
+fn shade(index: u32) {
     let surface = points[index];
     if surface.hit == 0u {
         direct[index] = no_direct_light();
@@ -274,8 +330,9 @@ fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
     var radiance = first.radiance;
     var total = 0u;
     var blocker_rays = 0u;
+    settle_kept(ball, origin, reach_base);
     for (var word = 0u; word < light_words; word++) {
-        let t = tally(ball, origin, reach_base, word);
+        let t = tally(ball, reach_base, word);
         if word == 0u {
             total = t.total;
             add_count(0u, t.candidates);
@@ -305,7 +362,7 @@ fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
                 // The nodes disagree on this light.
                 var share = BlockerShare(SHARE_FIXED, 0.0, 0u);
                 if directory.header.blocker_penumbra != 0u {
-                    share = blocker_share(point, ball, origin, reach_base, word, bit, light);
+                    share = blocker_share(point, ball, origin, word, bit, light);
                     blocker_rays += share.rays;
                 }
                 if share.kind == SHARE_HIDDEN {
