@@ -20,6 +20,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use lmanim::backend::Backend;
+use lmanim::lightmesh::penumbra::Penumbra;
 use lmanim::sequence::Sequence;
 use lmanim::settings::{Method, Settings};
 use lmanim::stats::FrameStats;
@@ -70,23 +71,36 @@ fn main() {
         .expect("city scene");
         for &(width, height) in &sizes {
             let mut whitted_seconds = 0.0;
-            for method in [Method::Whitted, Method::Lmm1, Method::Lmm] {
-                let settings = Settings {
+            // LMM1 with the default penumbrae (sized by their blockers)
+            // and with the paper's fixed radius: what the default costs.
+            let variants = [
+                (Method::Whitted, Penumbra::default()),
+                (Method::Lmm1, Penumbra::default()),
+                (Method::Lmm1, Penumbra::Fixed),
+                (Method::Lmm, Penumbra::default()),
+            ];
+            for (method, penumbra) in variants {
+                let mut settings = Settings {
                     width,
                     height,
                     method,
                     ..Settings::default()
+                };
+                settings.lightmesh.penumbra = penumbra;
+                let label = match (method, penumbra) {
+                    (Method::Lmm1, Penumbra::Fixed) => "lmm1, fixed".to_string(),
+                    _ => method.to_string(),
                 };
                 let (seconds, stats) = render_cold(&mut backend, &path, &settings);
                 if method == Method::Whitted {
                     whitted_seconds = seconds;
                 }
                 let mesh = stats.lightmesh.unwrap_or_default();
-                if (lamps, method) == (64, Method::Lmm1) {
+                if (lamps, method, penumbra) == (64, Method::Lmm1, Penumbra::default()) {
                     coarser = Some((path.clone(), settings.clone(), whitted_seconds, mesh.h));
                 }
                 println!(
-                    "| {lamps} | {height}p | {method} | {seconds:.2} | {:.1}× | {} | {} | {} | {:.1} | {} |",
+                    "| {lamps} | {height}p | {label} | {seconds:.2} | {:.1}× | {} | {} | {} | {:.1} | {} |",
                     whitted_seconds / seconds,
                     stats.shading_points,
                     mesh.nodes_computed,
@@ -102,16 +116,19 @@ fn main() {
                         .collect();
                     let fill = match stats.lightmesh {
                         Some(mesh) => format!(
-                            "{} shafts, {} segments ({} remembered), {} hidden groups",
+                            "{} shafts, {} segments ({} remembered), {} hidden groups; \
+                             blocker rays {} ({} level segments remembered)",
                             mesh.fill_shafts,
                             mesh.fill_segments,
                             mesh.fill_remembered,
-                            mesh.fill_hidden_groups
+                            mesh.fill_hidden_groups,
+                            mesh.blocker_rays,
+                            mesh.blocker_rays_remembered
                         ),
                         None => "—".to_string(),
                     };
                     stage_rows.push(format!(
-                        "| {height}p | {method} | {} | {fill} |",
+                        "| {height}p | {label} | {} | {fill} |",
                         stages.join(", ")
                     ));
                 }
@@ -122,7 +139,7 @@ fn main() {
     println!();
     println!("Stage seconds at 64 lamps:");
     println!();
-    println!("| size | method | stages | fill work |");
+    println!("| size | method | stages | fill and blocker work |");
     println!("|---|---|---|---|");
     for row in stage_rows {
         println!("{row}");

@@ -156,8 +156,11 @@ fn the_gpu_backend_sizes_penumbrae_as_the_cpu_does() {
         let (cpu, cpu_stats) = render_with_stats(wall_scene(true), &settings);
         let (image, stats) = render_on(&mut gpu, wall_scene(true), &settings);
         let rays = |stats: &FrameStats| stats.lightmesh.unwrap().blocker_rays;
-        assert!(rays(&cpu_stats) > 0);
-        assert_eq!(rays(&stats), rays(&cpu_stats), "{method}");
+        let remembered = cpu_stats.lightmesh.unwrap().blocker_rays_remembered;
+        assert!(rays(&cpu_stats) > 0 && remembered > 0);
+        // The GPU traces every level segment; the CPU's threads remember
+        // those a neighbouring point traced, and the frames stay equal.
+        assert_eq!(rays(&stats), rays(&cpu_stats) + remembered, "{method}");
         if exact {
             let differing = (image.pixels.iter().zip(&cpu.pixels))
                 .filter(|(gpu, cpu)| gpu != cpu)

@@ -14,7 +14,7 @@ use glam::IVec3;
 use super::enclosure::blocks_some;
 use super::kernel::{Kernel, Weights};
 use super::masks::BrickCache;
-use super::penumbra::{self, Penumbra};
+use super::penumbra::{self, LevelScratch, Penumbra};
 use super::{LightMesh, LightMeshStats};
 use crate::accel::offset::offset_ray_origin;
 use crate::accel::{Ray, World};
@@ -37,6 +37,9 @@ pub struct PointCounts {
     /// Rays of `penumbra: blocker`: those that found a light's blocker
     /// and the segments of a lattice level's nodes.
     pub blocker_rays: u64,
+    /// Level segments whose answer a neighbouring point had traced
+    /// ([`penumbra::LevelSight`]): not traced again.
+    pub blocker_rays_remembered: u64,
     /// Plain shadow rays (formula (1), lamp samples), by light class.
     pub shadow_rays: ClassRays,
 }
@@ -58,6 +61,7 @@ impl std::ops::AddAssign for PointCounts {
         self.p2n_tests += other.p2n_tests;
         self.fallback += other.fallback;
         self.blocker_rays += other.blocker_rays;
+        self.blocker_rays_remembered += other.blocker_rays_remembered;
         self.shadow_rays += other.shadow_rays;
     }
 }
@@ -73,8 +77,8 @@ pub struct Scratch<'a> {
     /// Per light word: lights visible from every node, from some node.
     all: Vec<u64>,
     any: Vec<u64>,
-    /// The nodes of a penumbra's lattice level (`penumbra: blocker`).
-    level_nodes: Vec<IVec3>,
+    /// The lattice levels' nodes and answers (`penumbra: blocker`).
+    levels: LevelScratch,
     bricks: BrickCache<'a>,
 }
 
@@ -86,7 +90,7 @@ impl<'a> Scratch<'a> {
             visible: Vec::new(),
             all: Vec::new(),
             any: Vec::new(),
-            level_nodes: Vec::new(),
+            levels: LevelScratch::default(),
             bricks: BrickCache::new(mesh.masks()),
         }
     }
@@ -111,6 +115,7 @@ impl LightMesh {
             mean_p2n_tests: counts.p2n_tests as f64 / points,
             fallback_points: counts.fallback,
             blocker_rays: counts.blocker_rays,
+            blocker_rays_remembered: counts.blocker_rays_remembered,
             bits_cached: self.masks().known_bits(),
             ..work
         }
@@ -140,7 +145,7 @@ impl LightMesh {
             visible,
             all,
             any,
-            level_nodes,
+            levels,
             bricks,
         } = scratch;
         nodes.clear();
@@ -236,7 +241,7 @@ impl LightMesh {
                             .sum();
                         Share::Part(seen as f32 / total as f32)
                     };
-                    let (by_blocker, rays) = match self.penumbra {
+                    let by_blocker = match self.penumbra {
                         Penumbra::Blocker => {
                             let set = nodes.iter().zip(sees()).map(|(&node, sees)| SetNode {
                                 node,
@@ -245,12 +250,15 @@ impl LightMesh {
                                     .distance_squared(node, point.position),
                                 sees,
                             });
-                            let light = &lights.lights()[light];
-                            self.blocker_share(point, light, set, world, level_nodes)
+                            let at = PenumbraAt {
+                                point,
+                                light,
+                                world,
+                            };
+                            self.blocker_share(at, lights.lights(), set, levels, &mut counts)
                         }
-                        Penumbra::Fixed => (None, 0),
+                        Penumbra::Fixed => None,
                     };
-                    counts.blocker_rays += rays;
                     let share = by_blocker.unwrap_or_else(fixed);
                     match share {
                         Share::Full => terms.add(light, omega.get(lane)),
@@ -263,23 +271,29 @@ impl LightMesh {
         counts
     }
 
-    /// The share of `light` at `point` by its blocker's distance
-    /// ([`penumbra`]): over the half-ball of the lattice level that the
-    /// light's penumbra wants there, its nodes' segments traced (into
-    /// `level_nodes`), or the centre ray's answer where the penumbra is
-    /// too narrow for any level; and the rays it traced. `set` is the
-    /// point's interpolation set seen from the light. The share is None
-    /// where nothing sizes the penumbra (a light without a position, or
-    /// a blocked node whose segment is found clear): the half-ball's
-    /// share stands there.
+    /// The share of light `at.light` at `at.point` by its blocker's
+    /// distance ([`penumbra`]): over the half-ball of the lattice level
+    /// that the light's penumbra wants there, its nodes' segments traced
+    /// or remembered (`levels`), or the centre ray's answer where the
+    /// penumbra is too narrow for any level; its rays go to `counts`.
+    /// `set` is the point's interpolation set seen from the light. The
+    /// share is None where nothing sizes the penumbra (a light without a
+    /// lamp, or a blocked node whose segment is found clear): the
+    /// half-ball's share stands there.
     fn blocker_share(
         &self,
-        point: &ShadingPoint,
-        light: &RenderLight,
+        at: PenumbraAt,
+        lights: &[RenderLight],
         set: impl Iterator<Item = SetNode>,
-        world: &World,
-        level_nodes: &mut Vec<IVec3>,
-    ) -> (Option<Share>, u64) {
+        levels: &mut LevelScratch,
+        counts: &mut PointCounts,
+    ) -> Option<Share> {
+        let PenumbraAt {
+            point,
+            light,
+            world,
+        } = at;
+        let (index, light) = (light, &lights[light]);
         // Ties (a lattice has many nodes at one distance) go to the least
         // coordinates, so the choice does not depend on the set's order.
         let nearest_blocked = set
@@ -290,37 +304,48 @@ impl LightMesh {
             })
             .map_or(point.position, |node| self.lattice.node_position(node.node));
         let origin = offset_ray_origin(point.position, point.geometric_normal);
-        let Some(estimate) = penumbra::estimate(origin, light, nearest_blocked, world) else {
-            return (None, 0);
-        };
+        let estimate = penumbra::estimate(origin, light, nearest_blocked, world)?;
+        counts.blocker_rays += estimate.rays;
         let hard = match estimate.centre_visible {
             true => Share::Full,
             false => Share::Hidden,
         };
-        let Some(radius) = estimate.radius else {
-            return (None, estimate.rays);
-        };
-        let Some(level) = penumbra::level(self.lattice, self.ki, radius) else {
-            return (Some(hard), estimate.rays);
+        let Some(level) = penumbra::level(self.lattice, self.ki, estimate.radius?) else {
+            return Some(hard);
         };
         let radius = self.ki * level.h;
-        level_nodes.clear();
-        level.half_ball(point.position, point.geometric_normal, radius, level_nodes);
+        let mut nodes = std::mem::take(&mut levels.nodes);
+        nodes.clear();
+        level.half_ball(point.position, point.geometric_normal, radius, &mut nodes);
         let weights = Weights::new(self.kernel, radius);
         let (mut total, mut seen) = (0u32, 0u32);
-        for &node in level_nodes.iter() {
+        for &node in &nodes {
             let weight = weights.weight(level.distance_squared(node, point.position));
             total += weight;
-            if !world.occluded(&light.shadow_ray(level.node_position(node))) {
+            let trace = || !world.occluded(&light.shadow_ray(level.node_position(node)));
+            let (sees, traced) = levels.sees(level, node, index, trace);
+            match traced {
+                true => counts.blocker_rays += 1,
+                false => counts.blocker_rays_remembered += 1,
+            }
+            if sees {
                 seen += weight;
             }
         }
-        let rays = estimate.rays + level_nodes.len() as u64;
+        levels.nodes = nodes;
         match total {
-            0 => (Some(hard), rays),
-            _ => (Some(Share::Part(seen as f32 / total as f32)), rays),
+            0 => Some(hard),
+            _ => Some(Share::Part(seen as f32 / total as f32)),
         }
     }
+}
+
+/// Where a penumbra is sized: the point, the light's number, the world.
+#[derive(Clone, Copy)]
+struct PenumbraAt<'a> {
+    point: &'a ShadingPoint,
+    light: usize,
+    world: &'a World,
 }
 
 /// A node of a point's interpolation set, seen from one light.

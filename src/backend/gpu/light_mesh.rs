@@ -292,6 +292,7 @@ impl<'m> LightMeshShading<'m> {
             p2n_tests: pair(2),
             fallback: pair(3),
             blocker_rays: pair(4),
+            blocker_rays_remembered: 0,
             shadow_rays: Default::default(),
         };
         stats.rays.shadow += self.work.fill_segments;
