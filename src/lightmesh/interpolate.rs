@@ -252,10 +252,11 @@ impl LightMesh {
                             });
                             let at = PenumbraAt {
                                 point,
+                                lights: lights.lights(),
                                 light,
                                 world,
                             };
-                            self.blocker_share(at, lights.lights(), set, levels, &mut counts)
+                            self.blocker_share(at, set, levels, bricks, &mut counts)
                         }
                         Penumbra::Fixed => None,
                     };
@@ -273,9 +274,12 @@ impl LightMesh {
 
     /// The share of light `at.light` at `at.point` by its blocker's
     /// distance ([`penumbra`]): over the half-ball of the lattice level
-    /// that the light's penumbra wants there, its nodes' segments traced
-    /// or remembered (`levels`), or the centre ray's answer where the
-    /// penumbra is too narrow for any level; its rays go to `counts`.
+    /// that the light's penumbra wants there, or the centre ray's answer
+    /// where the penumbra is too narrow for any level; its rays go to
+    /// `counts`. A level node's answer is its segment's: read from the
+    /// mesh's mask where the level is no finer than the mesh (its nodes
+    /// are the mesh's) and the bit is known, else remembered from a
+    /// neighbouring point (`levels`), else traced.
     /// `set` is the point's interpolation set seen from the light. The
     /// share is None where nothing sizes the penumbra (a light without a
     /// lamp, or a blocked node whose segment is found clear): the
@@ -283,17 +287,18 @@ impl LightMesh {
     fn blocker_share(
         &self,
         at: PenumbraAt,
-        lights: &[RenderLight],
         set: impl Iterator<Item = SetNode>,
         levels: &mut LevelScratch,
+        bricks: &mut BrickCache,
         counts: &mut PointCounts,
     ) -> Option<Share> {
         let PenumbraAt {
             point,
-            light,
+            lights,
+            light: index,
             world,
         } = at;
-        let (index, light) = (light, &lights[light]);
+        let light = &lights[index];
         // Ties (a lattice has many nodes at one distance) go to the least
         // coordinates, so the choice does not depend on the set's order.
         let nearest_blocked = set
@@ -318,12 +323,20 @@ impl LightMesh {
         nodes.clear();
         level.half_ball(point.position, point.geometric_normal, radius, &mut nodes);
         let weights = Weights::new(self.kernel, radius);
+        // Level k ≥ 0's node n is the mesh's node n·2^k, at the same
+        // position to the bit (scaling by a power of two is exact).
+        let mesh_steps = (level.h >= self.lattice.h).then(|| (level.h / self.lattice.h) as i32);
         let (mut total, mut seen) = (0u32, 0u32);
         for &node in &nodes {
             let weight = weights.weight(level.distance_squared(node, point.position));
             total += weight;
-            let trace = || !world.occluded(&light.shadow_ray(level.node_position(node)));
-            let (sees, traced) = levels.sees(level, node, index, trace);
+            let known = mesh_steps.and_then(|steps| known_sight(bricks, node * steps, index));
+            let (sees, traced) = match known {
+                Some(sees) => (sees, false),
+                None => levels.sees(level, node, index, || {
+                    !world.occluded(&light.shadow_ray(level.node_position(node)))
+                }),
+            };
             match traced {
                 true => counts.blocker_rays += 1,
                 false => counts.blocker_rays_remembered += 1,
@@ -340,10 +353,20 @@ impl LightMesh {
     }
 }
 
-/// Where a penumbra is sized: the point, the light's number, the world.
+/// Whether mesh node `node` sees light number `light`, where its mask
+/// knows: the answer its segment gives.
+fn known_sight(bricks: &mut BrickCache, node: IVec3, light: usize) -> Option<bool> {
+    let (word, bit) = (light / 64, light % 64);
+    let mask = bricks.mask(node)?;
+    (mask.valid(word) >> bit & 1 == 1).then(|| mask.visible(word) >> bit & 1 == 1)
+}
+
+/// Where a penumbra is sized: the point, the frame's lights and the
+/// number of the one sized, the world.
 #[derive(Clone, Copy)]
 struct PenumbraAt<'a> {
     point: &'a ShadingPoint,
+    lights: &'a [RenderLight],
     light: usize,
     world: &'a World,
 }
