@@ -321,14 +321,16 @@ impl LightMesh {
         let radius = self.ki * level.h;
         let mut nodes = std::mem::take(&mut levels.nodes);
         nodes.clear();
-        level.half_ball(point.position, point.geometric_normal, radius, &mut nodes);
+        let lamp = light.position()?;
+        let centre = penumbra::level_centre(point.position, point.geometric_normal, lamp, radius);
+        level.half_ball(centre, point.geometric_normal, radius, &mut nodes);
         let weights = Weights::new(self.kernel, radius);
         // Level k ≥ 0's node n is the mesh's node n·2^k, at the same
         // position to the bit (scaling by a power of two is exact).
         let mesh_steps = (level.h >= self.lattice.h).then(|| (level.h / self.lattice.h) as i32);
         let (mut total, mut seen) = (0u32, 0u32);
         for &node in &nodes {
-            let weight = weights.weight(level.distance_squared(node, point.position));
+            let weight = weights.weight(level.distance_squared(node, centre));
             total += weight;
             let known = mesh_steps.and_then(|steps| known_sight(bricks, node * steps, index));
             let (sees, traced) = match known {

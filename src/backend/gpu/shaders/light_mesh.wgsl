@@ -201,6 +201,23 @@ fn blocker_hit(start: vec3<f32>, centre: vec3<f32>) -> BlockerHit {
     return BlockerHit(true, mul(best.t, distance), distance);
 }
 
+// `penumbra::level_centre`: the level's half-ball moved along the surface
+// towards the lamp by its nodes' mean height (3/8 of the radius) times
+// tan θ, at most the radius.
+const MEAN_HEIGHT: f32 = 0.375;
+
+fn level_centre(p: vec3<f32>, n: vec3<f32>, lamp: vec3<f32>, radius: f32) -> vec3<f32> {
+    let to_lamp = lamp - p;
+    let along = dot3(to_lamp, n);
+    let across = to_lamp - scale3(n, along);
+    let across_length = root(dot3(across, across));
+    if along <= 0.0 || across_length == 0.0 {
+        return p;
+    }
+    let shift = min(div(mul(mul(MEAN_HEIGHT, radius), across_length), along), radius);
+    return p + scale3(across, div(shift, across_length));
+}
+
 // Whether node `a` comes before `b` in coordinates (x, then y, then z).
 fn coordinates_before(a: vec3<i32>, b: vec3<i32>) -> bool {
     if a.x != b.x {
@@ -270,7 +287,8 @@ fn blocker_share(point: ShadePoint, ball: HalfBall, origin: vec3<f32>, word: u32
     let inverse_radius_squared = div(1.0, mul(level_radius, level_radius));
     var total = 0u;
     var seen = 0u;
-    var level_nodes = walk(half_ball_at(point.position, point.geometric_normal, h, level_radius));
+    let centre = level_centre(point.position, point.geometric_normal, light.origin, level_radius);
+    var level_nodes = walk(half_ball_at(centre, point.geometric_normal, h, level_radius));
     while next_node(&level_nodes) {
         let weight = node_weight_at(level_nodes.distance_squared, inverse_radius_squared);
         total += weight;
