@@ -37,8 +37,8 @@ pub struct PointCounts {
     /// Rays of `penumbra: blocker`: those that found a light's blocker
     /// and the segments of a lattice level's nodes.
     pub blocker_rays: u64,
-    /// Level segments whose answer a neighbouring point had traced
-    /// ([`penumbra::LevelSight`]): not traced again.
+    /// Level segments answered without a ray: from the mesh's masks, or
+    /// traced by a neighbouring point ([`penumbra::LevelScratch`]).
     pub blocker_rays_remembered: u64,
     /// Plain shadow rays (formula (1), lamp samples), by light class.
     pub shadow_rays: ClassRays,

@@ -111,10 +111,10 @@ pub struct LightMeshStats {
     /// nodes disagree on: one or two closest-hit rays to find the blocker,
     /// and one segment per node of the lattice level's half-ball.
     pub blocker_rays: u64,
-    /// Level segments of `blocker` whose answer the CPU backend had from a
-    /// neighbouring point of the same thread, not traced again (the GPU
-    /// backend traces every one: its `blocker_rays` are the CPU's plus
-    /// these).
+    /// Level segments of `blocker` the CPU backend answered without a
+    /// ray: from the mesh's masks, or as a neighbouring point of the same
+    /// thread traced them (the GPU backend traces every one: its
+    /// `blocker_rays` are the CPU's plus these).
     pub blocker_rays_remembered: u64,
     /// Nodes probed for lying inside closed geometry this frame (LMM1
     /// only; each node once per run).

@@ -23,11 +23,15 @@
 //! half-ball of the lattice level whose radius kI·h_k comes nearest r_i,
 //! h_k = h·2^k for k from [`FINEST_LEVEL`] to [`COARSEST_LEVEL`] (the
 //! levels share the mesh's origin, so a coarser level's nodes are nodes
-//! of the mesh): narrow at a contact, wide far from the occluder. Those
-//! nodes' segments to the light are traced at the point, for that light
-//! alone, and kept nowhere. Below the finest level the light is taken
-//! as visible or not as the centre ray found: a hard shadow, which is
-//! what the lamp gives there.
+//! of the mesh): narrow at a contact, wide far from the occluder. The
+//! level's half-ball is moved towards the lamp along the surface
+//! ([`level_centre`]), since its nodes stand above the surface. A level
+//! node's answer is its segment's to the light: read from the mesh's
+//! masks where the node is the mesh's and its bit is known, remembered
+//! from a neighbouring point ([`LevelScratch`]), or traced; nothing is
+//! kept between frames. Below the finest level the light is taken as
+//! visible or not as the centre ray found: a hard shadow, which is what
+//! the lamp gives there.
 //!
 //! Points whose nodes all agree on a light (far from any shadow edge, most
 //! points) trace nothing and keep their value. Nothing here is kept from
@@ -167,7 +171,7 @@ fn power_of_two(exponent: i32) -> f32 {
 /// that asked, so an answer looked up here is the one tracing gives and
 /// frames keep their bits. Levels are told apart by their step h (exact
 /// powers of two of the mesh's, so equal steps are equal levels).
-/// Emptied when it holds [`LevelScratch::CAPACITY`] answers, and made per
+/// Emptied when it holds `LevelScratch::CAPACITY` answers, and made per
 /// frame: nothing is kept between frames.
 #[derive(Default)]
 pub struct LevelScratch {
