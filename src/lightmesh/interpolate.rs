@@ -332,7 +332,8 @@ impl LightMesh {
         for &node in &nodes {
             let weight = weights.weight(level.distance_squared(node, centre));
             total += weight;
-            let known = mesh_steps.and_then(|steps| known_sight(bricks, node * steps, index));
+            let mesh_node = mesh_steps.and_then(|steps| scaled_node(node, steps));
+            let known = mesh_node.and_then(|node| known_sight(bricks, node, index));
             let (sees, traced) = match known {
                 Some(sees) => (sees, false),
                 None => levels.sees(level, node, index, || {
@@ -353,6 +354,13 @@ impl LightMesh {
             _ => Some(Share::Part(seen as f32 / total as f32)),
         }
     }
+}
+
+/// `node` times `steps`, or None past the range of node coordinates (a
+/// node that far out holds no bits).
+fn scaled_node(node: IVec3, steps: i32) -> Option<IVec3> {
+    let scale = |c: i32| c.checked_mul(steps);
+    Some(IVec3::new(scale(node.x)?, scale(node.y)?, scale(node.z)?))
 }
 
 /// Whether mesh node `node` sees light number `light`, where its mask
@@ -391,4 +399,21 @@ enum Share {
     Hidden,
     /// This fraction of it.
     Part(f32),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn level_nodes_scale_to_mesh_nodes_within_the_coordinate_range() {
+        let node = IVec3::new(-3, 4, 5);
+        assert_eq!(scaled_node(node, 8), Some(IVec3::new(-24, 32, 40)));
+        assert_eq!(scaled_node(IVec3::new(0, i32::MAX / 2 + 1, 0), 2), None);
+        assert_eq!(
+            scaled_node(IVec3::new(0, 0, i32::MIN / 4), 4),
+            Some(IVec3::new(0, 0, i32::MIN))
+        );
+        assert_eq!(scaled_node(IVec3::new(i32::MIN / 4 - 1, 0, 0), 4), None);
+    }
 }
