@@ -148,6 +148,9 @@ pub fn run(
     let mut runs = Vec::with_capacity(specs.len());
     // Per method, the most accurate run in the penumbra and its frame.
     let mut best: Vec<(RunSpec, Image, f64)> = Vec::new();
+    // A light-mesh method's run at the default lattice: what a user gets
+    // without tuning, cropped beside its best.
+    let mut defaults: Vec<(RunSpec, Image, f64)> = Vec::new();
     for (index, spec) in specs.iter().enumerate() {
         let (image, seconds, h) = bench.timed(&spec.settings(&settings))?;
         let errors = reference
@@ -167,6 +170,10 @@ pub fn run(
                 .map_or("-".into(), |e| format!("{e:.4}")),
         ));
         let accuracy = errors.penumbra_rmse.unwrap_or(errors.rmse);
+        let default_lattice = spec.method.uses_light_mesh() && spec.h.is_none();
+        if default_lattice {
+            defaults.push((*spec, image.clone(), accuracy));
+        }
         match best
             .iter_mut()
             .find(|(kept, ..)| kept.method == spec.method)
@@ -182,7 +189,7 @@ pub fn run(
             spp: spec.spp,
             seconds,
             errors,
-            default_lattice: spec.method.uses_light_mesh() && spec.h.is_none(),
+            default_lattice,
             pareto: false,
         });
     }
@@ -205,11 +212,23 @@ pub fn run(
         title: "reference".into(),
         figures: reference_label(&report.reference),
     }];
-    crops.extend(best.iter().map(|(spec, image, accuracy)| Crop {
-        image,
-        title: spec.label(),
-        figures: format!("penumbra RMSE {accuracy:.4}"),
-    }));
+    for (spec, image, accuracy) in &best {
+        let default = defaults
+            .iter()
+            .find(|(kept, ..)| kept.method == spec.method);
+        if let Some((default, image, accuracy)) = default.filter(|(kept, ..)| kept != spec) {
+            crops.push(Crop {
+                image,
+                title: default.label(),
+                figures: format!("penumbra RMSE {accuracy:.4}"),
+            });
+        }
+        crops.push(Crop {
+            image,
+            title: spec.label(),
+            figures: format!("penumbra RMSE {accuracy:.4}"),
+        });
+    }
     plot::penumbra_crops(&options.out.join("crops.png"), &reference, &crops)?;
     Ok(report)
 }

@@ -1,7 +1,8 @@
 //! The study's pictures: `study.png`, error against time on log-log axes,
 //! one series per method with the Pareto front marked, for the lit pixels
 //! and for the penumbra; and `crops.png`, the same penumbra crop from the
-//! reference and from each method's most accurate run, side by side.
+//! reference and from each method's most accurate run (a light-mesh
+//! method's run at the default lattice before it), side by side.
 //!
 //! Both are drawn with `plotters` into an RGB buffer, labelled with an
 //! embedded font (no system font library), and written atomically.
