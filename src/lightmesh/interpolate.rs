@@ -319,10 +319,10 @@ impl LightMesh {
             return Some(hard);
         };
         let radius = self.ki * level.h;
-        let mut nodes = std::mem::take(&mut levels.nodes);
-        nodes.clear();
         let lamp = light.position()?;
         let centre = penumbra::level_centre(point.position, point.geometric_normal, lamp, radius);
+        let mut nodes = std::mem::take(&mut levels.nodes);
+        nodes.clear();
         level.half_ball(centre, point.geometric_normal, radius, &mut nodes);
         let weights = Weights::new(self.kernel, radius);
         // Level k ≥ 0's node n is the mesh's node n·2^k, at the same
