@@ -38,7 +38,7 @@ pub struct PointCounts {
     /// and the segments of a lattice level's nodes.
     pub blocker_rays: u64,
     /// Level segments answered without a ray: from the mesh's masks, or
-    /// traced by a neighbouring point ([`penumbra::LevelScratch`]).
+    /// traced by a neighbouring point ([`penumbra::LevelAnswers`]).
     pub blocker_rays_remembered: u64,
     /// Plain shadow rays (formula (1), lamp samples), by light class.
     pub shadow_rays: ClassRays,
@@ -321,22 +321,22 @@ impl LightMesh {
         let radius = self.ki * level.h;
         let lamp = light.position()?;
         let centre = penumbra::level_centre(point.position, point.geometric_normal, lamp, radius);
-        let mut nodes = std::mem::take(&mut levels.nodes);
+        let LevelScratch { nodes, answers } = levels;
         nodes.clear();
-        level.half_ball(centre, point.geometric_normal, radius, &mut nodes);
+        level.half_ball(centre, point.geometric_normal, radius, nodes);
         let weights = Weights::new(self.kernel, radius);
         // Level k ≥ 0's node n is the mesh's node n·2^k, at the same
         // position to the bit (scaling by a power of two is exact).
         let mesh_steps = (level.h >= self.lattice.h).then(|| (level.h / self.lattice.h) as i32);
         let (mut total, mut seen) = (0u32, 0u32);
-        for &node in &nodes {
+        for &node in nodes.iter() {
             let weight = weights.weight(level.distance_squared(node, centre));
             total += weight;
             let mesh_node = mesh_steps.and_then(|steps| scaled_node(node, steps));
             let known = mesh_node.and_then(|node| known_sight(bricks, node, index));
             let (sees, traced) = match known {
                 Some(sees) => (sees, false),
-                None => levels.sees(level, node, index, || {
+                None => answers.sees(level, node, index, || {
                     !world.occluded(&light.shadow_ray(level.node_position(node)))
                 }),
             };
@@ -348,7 +348,6 @@ impl LightMesh {
                 seen += weight;
             }
         }
-        levels.nodes = nodes;
         match total {
             0 => Some(hard),
             _ => Some(Share::Part(seen as f32 / total as f32)),

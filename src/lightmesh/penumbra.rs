@@ -43,7 +43,7 @@ use serde::{Deserialize, Serialize};
 
 use super::lattice::Lattice;
 use crate::accel::{Ray, World};
-use crate::render::light::{LightSource, RenderLight};
+use crate::render::light::RenderLight;
 
 /// How formula (2) sizes each light's interpolation set.
 #[derive(
@@ -90,10 +90,7 @@ pub fn estimate(
     nearest_blocked: Vec3,
     world: &World,
 ) -> Option<BlockerEstimate> {
-    let centre = match light.source {
-        LightSource::Point { position } | LightSource::Spot { position, .. } => position,
-        LightSource::Directional { .. } => return None,
-    };
+    let centre = light.position()?;
     if light.lamp_radius <= 0.0 {
         return None;
     }
@@ -145,7 +142,7 @@ const MEAN_HEIGHT: f32 = 0.375;
 /// contact's umbra ends early. Moving the centre along the surface
 /// towards the lamp by the nodes' mean height times tan θ (at most the
 /// radius, at grazing incidence) puts the samples' footprint back on the
-/// point (STUDY.md measured it: the boxes' error fell by a third).
+/// point (STUDY.md measured it: the boxes' penumbra error fell by 30–46%).
 pub fn level_centre(p: Vec3, n: Vec3, lamp: Vec3, radius: f32) -> Vec3 {
     let to_lamp = lamp - p;
     let along = to_lamp.dot(n);
@@ -164,22 +161,28 @@ fn power_of_two(exponent: i32) -> f32 {
 }
 
 /// One thread's working space for the lattice levels: the nodes of the
-/// level half-ball at hand, and which level nodes see which lights as the
-/// thread's points traced them. A point's neighbours want mostly the same
-/// nodes of the same level (a pixel is a centimetre or two, a level's
-/// step several), and a segment's answer does not depend on the point
-/// that asked, so an answer looked up here is the one tracing gives and
-/// frames keep their bits. Levels are told apart by their step h (exact
-/// powers of two of the mesh's, so equal steps are equal levels).
-/// Emptied when it holds `LevelScratch::CAPACITY` answers, and made per
-/// frame: nothing is kept between frames.
+/// level half-ball at hand, and the answers its points' segments gave.
 #[derive(Default)]
 pub struct LevelScratch {
     pub nodes: Vec<IVec3>,
-    answers: FxHashMap<(u32, IVec3, usize), bool>,
+    pub answers: LevelAnswers,
 }
 
-impl LevelScratch {
+/// Which level nodes see which lights, as one thread's points traced
+/// them. A point's neighbours want mostly the same nodes of the same
+/// level (a pixel is a centimetre or two, a level's step several), and a
+/// segment's answer does not depend on the point that asked, so an answer
+/// looked up here is the one tracing gives and frames keep their bits.
+/// Levels are told apart by their step h (exact powers of two of the
+/// mesh's, so equal steps are equal levels). Emptied when it holds
+/// `LevelAnswers::CAPACITY` answers, and made per frame: nothing is kept
+/// between frames.
+#[derive(Default)]
+pub struct LevelAnswers {
+    by_segment: FxHashMap<(u32, IVec3, usize), bool>,
+}
+
+impl LevelAnswers {
     /// About 1.5 MiB of answers per thread (four times as many found
     /// 3% more answers and made the frame slower).
     const CAPACITY: usize = 1 << 16;
@@ -194,14 +197,14 @@ impl LevelScratch {
         trace: impl FnOnce() -> bool,
     ) -> (bool, bool) {
         let key = (level.h.to_bits(), node, light);
-        if let Some(&sees) = self.answers.get(&key) {
+        if let Some(&sees) = self.by_segment.get(&key) {
             return (sees, false);
         }
-        if self.answers.len() >= Self::CAPACITY {
-            self.answers.clear();
+        if self.by_segment.len() >= Self::CAPACITY {
+            self.by_segment.clear();
         }
         let sees = trace();
-        self.answers.insert(key, sees);
+        self.by_segment.insert(key, sees);
         (sees, true)
     }
 }
@@ -240,7 +243,7 @@ mod tests {
     fn a_level_node_is_traced_once_per_light_and_level_until_the_scratch_fills() {
         let mesh = Lattice::new(0.1);
         let finer = level(mesh, 2.5, 0.12).expect("a level");
-        let mut levels = LevelScratch::default();
+        let mut levels = LevelAnswers::default();
         let node = IVec3::new(3, -1, 7);
         assert_eq!(levels.sees(mesh, node, 0, || true), (true, true));
         assert_eq!(
@@ -252,10 +255,10 @@ mod tests {
         assert_eq!(levels.sees(mesh, node, 1, || false), (false, true));
         assert_eq!(levels.sees(finer, node, 0, || false), (false, true));
         assert_eq!(levels.sees(finer, node, 0, || true), (false, false));
-        for x in 0..LevelScratch::CAPACITY as i32 {
+        for x in 0..LevelAnswers::CAPACITY as i32 {
             levels.sees(mesh, IVec3::new(x, 0, 0), 2, || true);
         }
-        assert!(levels.answers.len() <= LevelScratch::CAPACITY);
+        assert!(levels.by_segment.len() <= LevelAnswers::CAPACITY);
         assert_eq!(
             levels.sees(mesh, node, 0, || true),
             (true, true),
