@@ -33,10 +33,11 @@ const LOOPS_CUT_SHORT: u32 = 10u;
 // (the segment from the point to the node is clear), or LMM1's stand-in
 // (`enclosure::blocks_some`: not an enclosed node blocked from a light
 // the point asks for).
-fn kept(node: vec3<i32>, mask: NodeMask, origin: vec3<f32>, reach_base: u32) -> bool {
+fn kept(node: vec3<i32>, origin: vec3<f32>, reach_base: u32) -> bool {
     if directory.header.point_to_node_tests != 0u {
         return !segment_blocked(origin, node_position(node) - origin, 1.0);
     }
+    let mask = node_mask(node);
     if !mask.enclosed {
         return true;
     }
@@ -62,7 +63,7 @@ fn settle_kept(ball: HalfBall, origin: vec3<f32>, reach_base: u32) {
     var nodes = walk(ball);
     while next_node(&nodes) {
         let bit = 1u << (place % 32u);
-        if kept(nodes.node, node_mask(nodes.node), origin, reach_base) {
+        if kept(nodes.node, origin, reach_base) {
             kept_bits[place / 32u] |= bit;
         } else {
             kept_bits[place / 32u] &= ~bit;
