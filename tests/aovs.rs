@@ -125,11 +125,9 @@ fn the_gpu_writes_the_cpus_layers_for_every_method() {
     // The courtyard small: four lights, a mirror and a glass sphere (light
     // layers at every depth of the recursion), sky and background (in
     // `other`), two samples a pixel, every AOV.
-    let Some(gpu) = common::gpu::backend() else {
+    let Some((mut gpu, exact)) = common::gpu::backend_to_compare() else {
         return;
     };
-    let exact = gpu.rounds_as_the_cpu();
-    let mut gpu = Backend::Gpu(Box::new(gpu));
     let mut cpu = Backend::new(BackendKind::Cpu, Some(2)).expect("threads");
     for method in [Method::Whitted, Method::Lmm, Method::Lmm1, Method::Area] {
         let settings = Settings {

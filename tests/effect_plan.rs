@@ -465,11 +465,9 @@ fn plan_json_names_each_light_object_and_material() {
 
 #[test]
 fn the_gpu_follows_the_plan() {
-    let Some(gpu) = common::gpu::backend() else {
+    let Some((mut gpu, exact)) = common::gpu::backend_to_compare() else {
         return;
     };
-    let exact = gpu.rounds_as_the_cpu();
-    let mut gpu = Backend::Gpu(Box::new(gpu));
     let small = |method| {
         let mut settings = base_settings(method);
         settings.width = 24;

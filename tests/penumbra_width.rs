@@ -11,7 +11,6 @@ mod common;
 
 use common::*;
 use glam::{DMat4, DQuat, DVec3, Vec3};
-use lmanim::backend::Backend;
 use lmanim::lightmesh::penumbra::Penumbra;
 use lmanim::output::Image;
 use lmanim::scene::{Projection, SceneDesc};
@@ -143,11 +142,9 @@ fn points_whose_nodes_agree_trace_nothing_and_keep_their_bits() {
 
 #[test]
 fn the_gpu_backend_sizes_penumbrae_as_the_cpu_does() {
-    let Some(gpu) = common::gpu::backend() else {
+    let Some((mut gpu, exact)) = common::gpu::backend_to_compare() else {
         return;
     };
-    let exact = gpu.rounds_as_the_cpu();
-    let mut gpu = Backend::Gpu(Box::new(gpu));
     // Half the row, about the middle (lavapipe is slow): the umbra's end
     // and the far penumbra.
     for method in [Method::Lmm1, Method::Lmm] {

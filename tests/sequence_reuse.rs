@@ -438,11 +438,9 @@ fn a_mesh_deforming_in_part_renders_every_frame_like_cold() {
 /// does) the CPU backend's, bit for bit.
 #[test]
 fn gpu_frames_with_resident_masks_equal_cold_frames_and_the_cpus() {
-    let Some(gpu) = common::gpu::backend() else {
+    let Some((mut gpu, exact)) = common::gpu::backend_to_compare() else {
         return;
     };
-    let exact = gpu.rounds_as_the_cpu();
-    let mut gpu = Backend::Gpu(Box::new(gpu));
     let scene = with_bending_sheet(street(true, true, false));
     let on_gpu = sequences_equal_cold(&scene, &mut gpu);
     for (variant, gpu_frames) in VARIANTS.into_iter().zip(on_gpu) {
@@ -474,11 +472,9 @@ fn gpu_frames_with_resident_masks_equal_cold_frames_and_the_cpus() {
 /// and the frames are the CPU's.
 #[test]
 fn gpu_frames_that_move_nothing_send_no_point_to_the_cpu() {
-    let Some(gpu) = common::gpu::backend() else {
+    let Some((mut gpu, exact)) = common::gpu::backend_to_compare() else {
         return;
     };
-    let exact = gpu.rounds_as_the_cpu();
-    let mut gpu = Backend::Gpu(Box::new(gpu));
     let scene = street_animating(vec![keyed(
         Target::Light(1, LightProperty::Color),
         Interpolation::Linear,

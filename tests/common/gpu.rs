@@ -18,15 +18,21 @@ pub fn backend() -> Option<GpuBackend> {
     }
 }
 
+/// The GPU backend ready to render, and whether its adapter rounds as the
+/// CPU does (then its frames must be the CPU's bits); None as [`backend`].
+pub fn backend_to_compare() -> Option<(Backend, bool)> {
+    let gpu = backend()?;
+    let exact = gpu.rounds_as_the_cpu();
+    Some((Backend::Gpu(Box::new(gpu)), exact))
+}
+
 /// Renders `scene`'s first frame by `settings` on the GPU backend and holds
 /// it to the CPU backend's frame `on_cpu`: the same bits where the adapter
 /// rounds as the CPU does, finite everywhere else.
 pub fn assert_gpu_frame_is(scene: &SceneDesc, settings: &Settings, on_cpu: &Image) {
-    let Some(gpu) = backend() else {
+    let Some((mut gpu, exact)) = backend_to_compare() else {
         return;
     };
-    let exact = gpu.rounds_as_the_cpu();
-    let mut gpu = Backend::Gpu(Box::new(gpu));
     let (on_gpu, _) = super::render_on(&mut gpu, scene.clone(), settings);
     if exact {
         assert!(
