@@ -117,11 +117,13 @@ fn main() {
                     let fill = match stats.lightmesh {
                         Some(mesh) => format!(
                             "{} shafts, {} segments ({} remembered), {} hidden groups; \
+                             {} points settled by agreement; \
                              blocker rays {} ({} level segments remembered)",
                             mesh.fill_shafts,
                             mesh.fill_segments,
                             mesh.fill_remembered,
                             mesh.fill_hidden_groups,
+                            mesh.points_settled,
                             mesh.blocker_rays,
                             mesh.blocker_rays_remembered
                         ),

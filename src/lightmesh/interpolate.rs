@@ -11,6 +11,7 @@
 
 use glam::IVec3;
 
+use super::agreement::Agreement;
 use super::enclosure::blocks_some;
 use super::kernel::{Kernel, Weights};
 use super::masks::BrickCache;
@@ -34,6 +35,9 @@ pub struct PointCounts {
     pub interp_set: u64,
     pub p2n_tests: u64,
     pub fallback: u64,
+    /// Points whose value came from what the nodes around them agree on,
+    /// without walking their half-ball ([`Agreement`]).
+    pub settled: u64,
     /// Rays of `penumbra: blocker`: those that found a light's blocker
     /// and the segments of a lattice level's nodes.
     pub blocker_rays: u64,
@@ -60,6 +64,7 @@ impl std::ops::AddAssign for PointCounts {
         self.interp_set += other.interp_set;
         self.p2n_tests += other.p2n_tests;
         self.fallback += other.fallback;
+        self.settled += other.settled;
         self.blocker_rays += other.blocker_rays;
         self.blocker_rays_remembered += other.blocker_rays_remembered;
         self.shadow_rays += other.shadow_rays;
@@ -67,53 +72,60 @@ impl std::ops::AddAssign for PointCounts {
 }
 
 /// Reusable per-thread buffers, so shading allocates nothing per point,
-/// and the brick lookups neighbouring points share.
+/// and the brick lookups and summaries neighbouring points share.
 pub struct Scratch<'a> {
-    nodes: Vec<IVec3>,
-    /// The kernel's weight of each node of the set.
-    weights: Vec<u32>,
-    /// The visible-light words of each node of the set, node after node.
-    visible: Vec<u64>,
-    /// Per light word: lights visible from every node, from some node.
-    all: Vec<u64>,
-    any: Vec<u64>,
+    set: InterpolationSet,
     /// The lattice levels' nodes and answers (`penumbra: blocker`).
     levels: LevelScratch,
+    /// What the nodes around each tile agree on (LMM1).
+    agreement: Agreement,
     bricks: BrickCache<'a>,
 }
 
 impl<'a> Scratch<'a> {
     pub fn new(mesh: &'a LightMesh) -> Scratch<'a> {
         Scratch {
-            nodes: Vec::new(),
-            weights: Vec::new(),
-            visible: Vec::new(),
-            all: Vec::new(),
-            any: Vec::new(),
+            set: InterpolationSet::default(),
             levels: LevelScratch::default(),
+            agreement: Agreement::new(mesh.lattice, mesh.radius(), mesh.masks().words()),
             bricks: BrickCache::new(mesh.masks()),
         }
     }
 }
 
+/// A point's interpolation set D_LM(P) and what its nodes see.
+#[derive(Default)]
+struct InterpolationSet {
+    nodes: Vec<IVec3>,
+    /// The kernel's weight of each node.
+    weights: Vec<u32>,
+    /// The visible-light words of each node, node after node.
+    visible: Vec<u64>,
+    /// Per light word: lights visible from every node, from some node.
+    all: Vec<u64>,
+    any: Vec<u64>,
+}
+
 impl LightMesh {
     /// A frame's light-mesh statistics: what demand, fill and enclosure
     /// did (`work`), what shading its `points` shading points cost
-    /// (`counts`), and what the store holds after it.
+    /// (`counts`), and what the store holds after it. The means are over
+    /// the points that walked their half-ball (not those `settled`).
     pub fn frame_stats(
         &self,
         work: LightMeshStats,
         counts: PointCounts,
         points: u64,
     ) -> LightMeshStats {
-        let points = points.max(1) as f64;
+        let walked = points.saturating_sub(counts.settled).max(1) as f64;
         LightMeshStats {
             h: self.lattice.h,
             ki: self.ki,
-            mean_candidates: counts.candidates as f64 / points,
-            mean_interp_set: counts.interp_set as f64 / points,
-            mean_p2n_tests: counts.p2n_tests as f64 / points,
+            mean_candidates: counts.candidates as f64 / walked,
+            mean_interp_set: counts.interp_set as f64 / walked,
+            mean_p2n_tests: counts.p2n_tests as f64 / walked,
             fallback_points: counts.fallback,
+            points_settled: counts.settled,
             blocker_rays: counts.blocker_rays,
             blocker_rays_remembered: counts.blocker_rays_remembered,
             bits_cached: self.masks().known_bits(),
@@ -140,76 +152,49 @@ impl LightMesh {
     ) -> PointCounts {
         let mut counts = PointCounts::default();
         let Scratch {
+            set,
+            levels,
+            agreement,
+            bricks,
+        } = scratch;
+        set.all.clear();
+        set.all.resize(reach.len(), 0);
+        // LMM's set is what the point sees, which no summary knows.
+        let total = if !point_to_node_tests
+            && agreement.settle(point.position, reach, bricks, &mut set.all)
+        {
+            counts.settled = 1;
+            set.any.clone_from(&set.all);
+            // Each light is seen by every node of the set or by none: none
+            // below needs the set's nodes or its weight.
+            0
+        } else {
+            let total = self.gather(
+                point,
+                reach,
+                world,
+                point_to_node_tests,
+                set,
+                bricks,
+                &mut counts,
+            );
+            if total == 0 {
+                counts.fallback = 1;
+                counts.shadow_rays =
+                    whitted::direct_light_terms(point, lights, world, shadows, terms);
+                return counts;
+            }
+            total
+        };
+        let InterpolationSet {
             nodes,
             weights,
             visible,
             all,
             any,
-            levels,
-            bricks,
-        } = scratch;
-        nodes.clear();
-        self.lattice
-            .half_ball(point.position, point.geometric_normal, self.radius(), nodes);
-        counts.candidates = nodes.len() as u64;
-        if point_to_node_tests {
-            counts.p2n_tests = nodes.len() as u64;
-            let origin = offset_ray_origin(point.position, point.geometric_normal);
-            let lattice = self.lattice;
-            nodes.retain(|&node| {
-                let x = lattice.node_position(node);
-                !world.occluded(&Ray::new(origin, x - origin, 1.0))
-            });
-        } else {
-            // LMM1's stand-in for those tests: nodes inside closed
-            // geometry, settled once per node by the enclosure stage,
-            // where they are blocked from a light the point asks for.
-            nodes.retain(|&node| {
-                !(bricks.is_enclosed(node)
-                    && bricks
-                        .mask(node)
-                        .is_some_and(|mask| blocks_some(&mask, reach)))
-            });
-        }
-        counts.interp_set = nodes.len() as u64;
-        let kernel = self.weights();
-        weights.clear();
-        weights.extend(nodes.iter().map(|&node| match kernel.kernel() {
-            Kernel::Box => 1,
-            Kernel::Smooth => kernel.weight(self.lattice.distance_squared(node, point.position)),
-        }));
-        // Σ w_k: with the box kernel, m; with the smooth one, zero only
-        // when every node lies on the rim.
-        let total: u32 = weights.iter().sum();
-        if total == 0 {
-            counts.fallback = 1;
-            counts.shadow_rays = whitted::direct_light_terms(point, lights, world, shadows, terms);
-            return counts;
-        }
-
-        // Where every node agrees (far from shadow edges, the common case)
-        // a light is fully visible or fully hidden; only lights the nodes
-        // disagree on need their visible nodes counted.
+        } = set;
         let words = reach.len();
-        visible.clear();
-        all.clear();
-        all.extend_from_slice(reach);
-        any.clear();
-        any.resize(words, 0);
-        for &node in nodes.iter() {
-            let mask = bricks.mask(node);
-            for word in 0..words {
-                debug_assert_eq!(
-                    mask.map_or(0, |m| m.valid(word)) & reach[word],
-                    reach[word],
-                    "formula (2) read a mask bit that the fill stage did not compute"
-                );
-                let seen = mask.map_or(0, |m| m.visible(word)) & reach[word];
-                visible.push(seen);
-                all[word] &= seen;
-                any[word] |= seen;
-            }
-        }
+
         // Omega eight lights at a time, for the blocks where some node sees
         // a light; the sum runs in light order.
         let at = PointLanes::new(point);
@@ -270,6 +255,86 @@ impl LightMesh {
             }
         }
         counts
+    }
+
+    /// Steps 1–3 for `point`: its interpolation set into `set`, with the
+    /// nodes' weights and what they see of the lights in `reach`; returns
+    /// the weights' sum Σ w_k, 0 for an empty set (formula (1) then).
+    #[allow(clippy::too_many_arguments)]
+    fn gather(
+        &self,
+        point: &ShadingPoint,
+        reach: &[u64],
+        world: &World,
+        point_to_node_tests: bool,
+        set: &mut InterpolationSet,
+        bricks: &mut BrickCache,
+        counts: &mut PointCounts,
+    ) -> u32 {
+        let InterpolationSet {
+            nodes,
+            weights,
+            visible,
+            all,
+            any,
+        } = set;
+        nodes.clear();
+        self.lattice
+            .half_ball(point.position, point.geometric_normal, self.radius(), nodes);
+        counts.candidates = nodes.len() as u64;
+        if point_to_node_tests {
+            counts.p2n_tests = nodes.len() as u64;
+            let origin = offset_ray_origin(point.position, point.geometric_normal);
+            let lattice = self.lattice;
+            nodes.retain(|&node| {
+                let x = lattice.node_position(node);
+                !world.occluded(&Ray::new(origin, x - origin, 1.0))
+            });
+        } else {
+            // LMM1's stand-in for those tests: nodes inside closed
+            // geometry, settled once per node by the enclosure stage,
+            // where they are blocked from a light the point asks for.
+            nodes.retain(|&node| {
+                !(bricks.is_enclosed(node)
+                    && bricks
+                        .mask(node)
+                        .is_some_and(|mask| blocks_some(&mask, reach)))
+            });
+        }
+        counts.interp_set = nodes.len() as u64;
+        let kernel = self.weights();
+        weights.clear();
+        weights.extend(nodes.iter().map(|&node| match kernel.kernel() {
+            Kernel::Box => 1,
+            Kernel::Smooth => kernel.weight(self.lattice.distance_squared(node, point.position)),
+        }));
+
+        // Where every node agrees (far from shadow edges, the common case)
+        // a light is fully visible or fully hidden; only lights the nodes
+        // disagree on need their visible nodes counted.
+        let words = reach.len();
+        visible.clear();
+        all.clear();
+        all.extend_from_slice(reach);
+        any.clear();
+        any.resize(words, 0);
+        for &node in nodes.iter() {
+            let mask = bricks.mask(node);
+            for word in 0..words {
+                debug_assert_eq!(
+                    mask.map_or(0, |m| m.valid(word)) & reach[word],
+                    reach[word],
+                    "formula (2) read a mask bit that the fill stage did not compute"
+                );
+                let seen = mask.map_or(0, |m| m.visible(word)) & reach[word];
+                visible.push(seen);
+                all[word] &= seen;
+                any[word] |= seen;
+            }
+        }
+        // Σ w_k: with the box kernel, m; with the smooth one, zero only
+        // when every node lies on the rim.
+        weights.iter().sum()
     }
 
     /// The share of light `at.light` at `at.point` by its blocker's

@@ -56,6 +56,11 @@ impl Lattice {
         (x * x + y * y) + z * z
     }
 
+    /// `p` in steps from the origin: node coordinates, fractional.
+    pub fn local(&self, p: Vec3) -> Vec3 {
+        (p - self.origin) / self.h
+    }
+
     /// Whether every node within `radius` of `p` has a representable
     /// coordinate.
     pub fn covers(&self, p: Vec3, radius: f32) -> bool {
@@ -80,7 +85,7 @@ impl Lattice {
     ///
     /// `radius` is at most [`MAX_KI`] steps.
     pub fn half_ball(&self, p: Vec3, n: Vec3, radius: f32, out: &mut Vec<IVec3>) {
-        let local = (p - self.origin) / self.h;
+        let local = self.local(p);
         let reach = radius / self.h;
         assert!(
             reach <= MAX_KI,

@@ -9,6 +9,7 @@
 //! `enclosure`, after the fill: which nodes lie inside closed geometry,
 //! which its formula (2) leaves out.
 
+mod agreement;
 pub mod cache;
 pub mod demand;
 pub mod enclosure;
@@ -99,12 +100,16 @@ pub struct LightMeshStats {
     pub bits_cached: u64,
     /// Nodes with any valid bit after the frame.
     pub nodes_cached: u64,
-    /// Mean nodes per shading point after steps 1–2.
+    /// Mean nodes per shading point after steps 1–2, over the points
+    /// that walked their half-ball (all but `points_settled`).
     pub mean_candidates: f64,
-    /// Mean size m of the interpolation set D_LM(P).
+    /// Mean size m of the interpolation set D_LM(P), over the same.
     pub mean_interp_set: f64,
     /// Mean step-3 (point-to-node) tests per point; 0 for LMM1.
     pub mean_p2n_tests: f64,
+    /// LMM1's points whose nodes all around agree on each of their
+    /// lights: formula (2) took their value without the half-ball.
+    pub points_settled: u64,
     /// Points shaded by formula (1) because their set was empty.
     pub fallback_points: u64,
     /// Rays of `lightmesh.penumbra: blocker`, per point and light its

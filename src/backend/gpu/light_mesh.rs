@@ -291,6 +291,8 @@ impl<'m> LightMeshShading<'m> {
             interp_set: pair(1),
             p2n_tests: pair(2),
             fallback: pair(3),
+            // The shader walks every point's half-ball.
+            settled: 0,
             blocker_rays: pair(4),
             blocker_rays_remembered: 0,
             shadow_rays: Default::default(),

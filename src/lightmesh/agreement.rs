@@ -1,0 +1,441 @@
+//! Where every node near a shading point agrees on every light, formula
+//! (2) needs no half-ball. Most of a frame's points lie far from any shadow
+//! edge: each light is seen by all of their nodes or by none, so formula
+//! (2) gives the light's whole Omega or nothing. Walking the half-ball and
+//! reading its ~32 masks only to learn that costs a light-mesh frame about
+//! a third of its shading stage.
+//!
+//! So the lattice is cut into tiles of 4×4×4 nodes, and for the tile that
+//! holds a point's cell, a summary of the nodes *around* it (every node
+//! the half-ball of a point in one of the tile's cells can hold) says
+//! which lights all of them see and which none of them does. Where each
+//! light the point asks for is one or the other, the point takes formula
+//! (2)'s value from the summary: every node of its set sees the light
+//! (share 1) or none does (share 0), which is what the walk would find, to
+//! the bit. Anywhere else the point walks its half-ball as before.
+//!
+//! Only bits the fill computed count (a node's set holds only such bits for
+//! the point's lights), so a summary may see other points' bits: it can
+//! only make a point walk, never change what the point gets. Summaries are
+//! made as shading meets tiles, per thread and per frame (nothing is kept
+//! between frames, so cached frames stay equal to cold ones).
+
+use glam::{IVec3, Vec3};
+use rustc_hash::FxHashMap;
+
+use super::lattice::{Lattice, MAX_NODE_COORDINATE};
+use super::masks::{BrickCache, BRICK_EDGE};
+
+/// Nodes along each edge of a tile: a divisor of [`BRICK_EDGE`], so a
+/// tile lies in one brick.
+const TILE_EDGE: i32 = 4;
+const TILE_SHIFT: i32 = TILE_EDGE.trailing_zeros() as i32;
+const _: () = assert!(BRICK_EDGE % TILE_EDGE == 0);
+
+/// The smallest kI for which a half-ball always holds a node of positive
+/// weight: its inner ball of radius r/2 (centred r/2 along the normal)
+/// holds a node within √3/2·h of its centre, so at least 0.13·h in front
+/// of the tangent plane and at most 0.94·r from the point (a smooth weight
+/// of 4095·(1 − 0.94²)² ≥ 68). Below it a set may be empty, which formula
+/// (1) answers instead; the summary cannot tell, so it is not used there.
+const SMALLEST_KI: f32 = 2.0;
+
+/// Tiles summarised per thread before the summaries are dropped and made
+/// again: bounds the memory of a frame's thread.
+const CAPACITY: usize = 1 << 14;
+
+/// Per-thread summaries of what tiles, and the nodes around them, agree on.
+pub struct Agreement {
+    lattice: Lattice,
+    /// Nodes beyond a point's cell that its half-ball may hold, per side:
+    /// the radius in steps rounded down, and one more for the rounding of
+    /// the half-ball's bounds.
+    margin: i32,
+    usable: bool,
+    /// Each tile's own 64 nodes.
+    own: Summaries,
+    /// The nodes around each tile.
+    around: Summaries,
+}
+
+impl Agreement {
+    /// Summaries for half-balls of `radius` on `lattice`, with `words`
+    /// words of light bits.
+    pub fn new(lattice: Lattice, radius: f32, words: usize) -> Agreement {
+        // In steps, as `Lattice::half_ball` rounds it.
+        let reach = radius / lattice.h;
+        Agreement {
+            lattice,
+            margin: reach.floor() as i32 + 1,
+            usable: reach >= SMALLEST_KI,
+            own: Summaries::new(words),
+            around: Summaries::new(words),
+        }
+    }
+
+    /// Whether every node of the set of the point at `p` agrees on every
+    /// light of `reach`, by the summary of the nodes around it; if so,
+    /// `seen` gets the lights of `reach` that they all see (the others
+    /// none of them sees). The masks are read through `bricks`.
+    pub fn settle(
+        &mut self,
+        p: Vec3,
+        reach: &[u64],
+        bricks: &mut BrickCache,
+        seen: &mut [u64],
+    ) -> bool {
+        if !self.usable {
+            return false;
+        }
+        let cell = self.lattice.local(p).floor();
+        if !cell.is_finite() || cell.abs().max_element() >= MAX_NODE_COORDINATE {
+            return false; // too far out for node coordinates
+        }
+        let tile = cell.as_ivec3() >> TILE_SHIFT;
+        let around = self.around(tile, bricks);
+        let summary = self.around.get(around);
+        for (word, &asked) in reach.iter().enumerate() {
+            let all = summary.seen_by_all(word);
+            // A node inside closed geometry that hides a light leaves the
+            // set (see `interpolate`), which a light hidden from every node
+            // cannot tell from the summary: a set of such nodes alone would
+            // be empty. Lights every node sees keep every node in it.
+            let none = match summary.enclosed {
+                true => 0,
+                false => summary.seen_by_none(word),
+            };
+            if asked & !(all | none) != 0 {
+                return false;
+            }
+            seen[word] = asked & all;
+        }
+        true
+    }
+
+    /// Where the summary of the nodes around `tile` is, made first if need
+    /// be: those of the tiles holding every node a half-ball of a point in
+    /// one of the tile's cells may hold.
+    fn around(&mut self, tile: IVec3, bricks: &mut BrickCache) -> usize {
+        if let Some(at) = self.around.find(tile) {
+            return at;
+        }
+        if self.around.len() >= CAPACITY || self.own.len() >= CAPACITY {
+            self.around.clear();
+            self.own.clear();
+        }
+        let first = (tile * TILE_EDGE - IVec3::splat(self.margin)) >> TILE_SHIFT;
+        let last = ((tile + IVec3::ONE) * TILE_EDGE + IVec3::splat(self.margin)) >> TILE_SHIFT;
+        let at = self.around.insert(tile);
+        for z in first.z..=last.z {
+            for y in first.y..=last.y {
+                for x in first.x..=last.x {
+                    let near = self.own(IVec3::new(x, y, z), bricks);
+                    self.around.absorb(at, &self.own, near);
+                }
+            }
+        }
+        at
+    }
+
+    /// Where the summary of `tile`'s own nodes is, made first if need be.
+    fn own(&mut self, tile: IVec3, bricks: &mut BrickCache) -> usize {
+        if let Some(at) = self.own.find(tile) {
+            return at;
+        }
+        let at = self.own.insert(tile);
+        for z in 0..TILE_EDGE {
+            for y in 0..TILE_EDGE {
+                for x in 0..TILE_EDGE {
+                    let node = tile * TILE_EDGE + IVec3::new(x, y, z);
+                    let enclosed = bricks.is_enclosed(node);
+                    let Some(mask) = bricks.mask(node) else {
+                        continue;
+                    };
+                    self.own
+                        .add_node(at, enclosed, |word| (mask.visible(word), mask.valid(word)));
+                }
+            }
+        }
+        at
+    }
+}
+
+/// Summaries of sets of nodes, by tile: per light word, the lights every
+/// node sees and those none sees (counting only bits that are known), and
+/// whether a node lies inside closed geometry.
+struct Summaries {
+    words: usize,
+    index: FxHashMap<IVec3, usize>,
+    /// Per summary, `words` words of lights all see, then `words` of
+    /// lights none sees.
+    bits: Vec<u64>,
+    enclosed: Vec<bool>,
+}
+
+/// One summary, read.
+struct Summary<'a> {
+    bits: &'a [u64],
+    enclosed: bool,
+}
+
+impl Summary<'_> {
+    fn seen_by_all(&self, word: usize) -> u64 {
+        self.bits[word]
+    }
+
+    fn seen_by_none(&self, word: usize) -> u64 {
+        self.bits[self.bits.len() / 2 + word]
+    }
+}
+
+impl Summaries {
+    fn new(words: usize) -> Summaries {
+        Summaries {
+            words,
+            index: FxHashMap::default(),
+            bits: Vec::new(),
+            enclosed: Vec::new(),
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.enclosed.len()
+    }
+
+    fn clear(&mut self) {
+        self.index.clear();
+        self.bits.clear();
+        self.enclosed.clear();
+    }
+
+    fn find(&self, tile: IVec3) -> Option<usize> {
+        self.index.get(&tile).copied()
+    }
+
+    /// A summary of no nodes yet: every light counts as seen by all and by
+    /// none until a node says otherwise.
+    fn insert(&mut self, tile: IVec3) -> usize {
+        let at = self.len();
+        self.index.insert(tile, at);
+        self.bits.resize(self.bits.len() + 2 * self.words, !0);
+        self.enclosed.push(false);
+        at
+    }
+
+    fn get(&self, at: usize) -> Summary<'_> {
+        Summary {
+            bits: &self.bits[2 * self.words * at..2 * self.words * (at + 1)],
+            enclosed: self.enclosed[at],
+        }
+    }
+
+    /// Adds a node to summary `at`: `bits(word)` gives its visible and its
+    /// valid lights of that word.
+    fn add_node(&mut self, at: usize, enclosed: bool, bits: impl Fn(usize) -> (u64, u64)) {
+        let words = self.words;
+        let summary = &mut self.bits[2 * words * at..2 * words * (at + 1)];
+        for word in 0..words {
+            let (visible, valid) = bits(word);
+            summary[word] &= visible | !valid;
+            summary[words + word] &= !visible | !valid;
+        }
+        self.enclosed[at] |= enclosed;
+    }
+
+    /// Adds every node of `from`'s summary `near` to summary `at`.
+    fn absorb(&mut self, at: usize, from: &Summaries, near: usize) {
+        let words = self.words;
+        let near = from.get(near);
+        let summary = &mut self.bits[2 * words * at..2 * words * (at + 1)];
+        for (into, bits) in summary.iter_mut().zip(near.bits) {
+            *into &= bits;
+        }
+        self.enclosed[at] |= near.enclosed;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::lightmesh::enclosure::blocks_some;
+    use crate::lightmesh::masks::{split, BrickEnclosure, MaskStore};
+
+    const H: f32 = 0.1;
+    /// Lights of the test store, in two words: seen everywhere (but from
+    /// inside the enclosed block), seen beyond a plane x = 3 steps, hidden
+    /// everywhere, hidden by a dynamic object on the plane z = 1.
+    const LIGHTS: [usize; 4] = [0, 1, 66, 67];
+    const ENCLOSED_BELOW_Y: i32 = -6;
+
+    fn store() -> MaskStore {
+        let mut store = MaskStore::new(70);
+        for z in -12..=12 {
+            for y in -12..=12 {
+                for x in -12..=12 {
+                    let node = IVec3::new(x, y, z);
+                    let inside = y <= ENCLOSED_BELOW_Y;
+                    store.set(node, 0, !inside, Some(false));
+                    store.set(node, 1, x >= 3, Some(false));
+                    store.set(node, 66, false, None);
+                    store.set(node, 67, true, Some(z == 1));
+                    if inside {
+                        let (brick, slot) = split(node);
+                        let mut flags = BrickEnclosure::default();
+                        flags.known[slot / 64] = 1 << (slot % 64);
+                        flags.enclosed[slot / 64] = 1 << (slot % 64);
+                        store.merge_enclosure(brick, &flags);
+                    }
+                }
+            }
+        }
+        store
+    }
+
+    /// What walking the point's set finds, as `interpolate` walks it: the
+    /// lights of `reach` every node sees and those some node sees, or None
+    /// for an empty set.
+    fn walked(
+        lattice: Lattice,
+        radius: f32,
+        bricks: &mut BrickCache,
+        (p, n): (Vec3, Vec3),
+        reach: &[u64],
+    ) -> Option<(Vec<u64>, Vec<u64>)> {
+        let mut nodes = Vec::new();
+        lattice.half_ball(p, n, radius, &mut nodes);
+        nodes.retain(|&node| {
+            !(bricks.is_enclosed(node) && bricks.mask(node).is_some_and(|m| blocks_some(&m, reach)))
+        });
+        let mut all = reach.to_vec();
+        let mut any = vec![0; reach.len()];
+        for &node in &nodes {
+            let mask = bricks.mask(node).expect("every node of the test has bits");
+            for word in 0..reach.len() {
+                assert_eq!(mask.valid(word) & reach[word], reach[word]);
+                let seen = mask.visible(word) & reach[word];
+                all[word] &= seen;
+                any[word] |= seen;
+            }
+        }
+        (!nodes.is_empty()).then_some((all, any))
+    }
+
+    /// Points inside the filled block: on nodes, on lattice planes, deep
+    /// in the enclosed block (whose sets may be empty), in the first cells
+    /// of a tile whose half-balls just reach back over the edge at x = 3
+    /// into the tile before, and
+    /// anywhere; with normals of every kind (axis-aligned ones put whole
+    /// layers of nodes on the tangent plane).
+    fn points(lattice: Lattice, count: usize) -> Vec<(Vec3, Vec3)> {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut uniform = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        (0..count)
+            .map(|i| {
+                let mut local = Vec3::new(uniform(), uniform(), uniform()) * 10.0 - 5.0;
+                match i % 8 {
+                    0 => local = local.round(),
+                    1 => local.x = local.x.round(),
+                    2 => local.y = -9.0 + uniform() - 0.5,
+                    3 => local.x = 4.0 + 0.5 * uniform(),
+                    _ => {}
+                }
+                let n = match i % 5 {
+                    0 => Vec3::Y,
+                    1 => -Vec3::X,
+                    2 => Vec3::X,
+                    _ => (Vec3::new(uniform(), uniform(), uniform()) - 0.5).normalize_or(Vec3::Z),
+                };
+                (lattice.origin + local * lattice.h, n)
+            })
+            .collect()
+    }
+
+    fn reach_of(i: usize) -> [u64; 2] {
+        let mut reach = [0; 2];
+        for (k, &light) in LIGHTS.iter().enumerate() {
+            if (i >> k) & 1 == 1 {
+                reach[light / 64] |= 1 << (light % 64);
+            }
+        }
+        reach
+    }
+
+    #[test]
+    fn a_settled_point_gets_what_walking_its_set_finds() {
+        let store = store();
+        let lattice = Lattice::new(H);
+        let radius = 2.5 * H;
+        let mut agreement = Agreement::new(lattice, radius, store.words());
+        let mut bricks = BrickCache::new(&store);
+        let (mut settled, mut walked_only) = (0, 0);
+        for (i, point) in points(lattice, 4000).into_iter().enumerate() {
+            let reach = reach_of(i % 16);
+            let mut seen = [0; 2];
+            let walk = walked(lattice, radius, &mut bricks, point, &reach);
+            if agreement.settle(point.0, &reach, &mut bricks, &mut seen) {
+                settled += 1;
+                let (all, any) = walk.expect("a settled point's set is never empty");
+                assert_eq!(all, any, "{point:?}: its nodes disagree");
+                assert_eq!(seen.to_vec(), all, "{point:?}");
+            } else {
+                walked_only += 1;
+            }
+        }
+        // Both ways are taken: points near the edge at x = 3, the plane
+        // z = 1 or the enclosed block walk; the others are settled.
+        assert!(
+            settled > 500 && walked_only > 500,
+            "{settled} / {walked_only}"
+        );
+    }
+
+    #[test]
+    fn summaries_dropped_at_capacity_are_made_again_alike() {
+        let store = store();
+        let lattice = Lattice::new(H);
+        let mut bricks = BrickCache::new(&store);
+        let mut agreement = Agreement::new(lattice, 2.5 * H, store.words());
+        let far = lattice.origin + Vec3::new(0.5, 0.5, 0.5) * H;
+        let reach = reach_of(0b0101);
+        let mut first = [0; 2];
+        assert!(agreement.settle(far, &reach, &mut bricks, &mut first));
+        // Fill the caches with tiles of other points until they are dropped.
+        for x in 0..CAPACITY as i32 + 1 {
+            let elsewhere = lattice.origin + Vec3::new(x as f32 * 4.0, 400.0, 0.0) * H;
+            agreement.settle(elsewhere, &reach, &mut bricks, &mut [0; 2]);
+        }
+        assert!(agreement.own.len() <= CAPACITY + 64 && agreement.around.len() <= CAPACITY);
+        let mut again = [0; 2];
+        assert!(agreement.settle(far, &reach, &mut bricks, &mut again));
+        assert_eq!(first, again);
+        assert_eq!(first, [1, 0]);
+    }
+
+    #[test]
+    fn small_radii_and_points_beyond_the_lattice_always_walk() {
+        let store = store();
+        let lattice = Lattice::new(H);
+        let mut bricks = BrickCache::new(&store);
+        let reach = reach_of(0b0001);
+        let inside = lattice.origin + Vec3::new(0.5, 0.5, 0.5) * H;
+        // Below kI = 2 a half-ball may hold no node: formula (1) decides.
+        let mut small = Agreement::new(lattice, 1.9 * H, store.words());
+        assert!(!small.settle(inside, &reach, &mut bricks, &mut [0; 2]));
+        let mut agreement = Agreement::new(lattice, 2.5 * H, store.words());
+        assert!(agreement.settle(inside, &reach, &mut bricks, &mut [0; 2]));
+        for beyond in [
+            Vec3::splat(1e30),
+            Vec3::new(f32::NAN, 0.0, 0.0),
+            Vec3::splat(f32::INFINITY),
+        ] {
+            assert!(!agreement.settle(beyond, &reach, &mut bricks, &mut [0; 2]));
+        }
+    }
+}
