@@ -242,6 +242,22 @@ impl World {
         self.occluded_dynamic(ray) || self.occluded_static(ray)
     }
 
+    /// [`World::occluded`]'s answer, trying the static triangle in
+    /// `blocker` (what a nearby segment crossed) before walking the
+    /// static tree, and keeping there the one this ray crosses.
+    pub fn occluded_near(&self, ray: &Ray, blocker: &mut Option<StaticTriangle>) -> bool {
+        if self.occluded_dynamic(ray) {
+            return true;
+        }
+        match self.static_occluder(ray, *blocker) {
+            Some(triangle) => {
+                *blocker = Some(triangle);
+                true
+            }
+            None => false,
+        }
+    }
+
     /// Whether static geometry lies on the ray in `(0, t_max)`.
     pub fn occluded_static(&self, ray: &Ray) -> bool {
         self.static_bvh.occluded(ray)

@@ -386,7 +386,15 @@ impl LightMesh {
         let radius = self.ki * level.h;
         let lamp = light.position()?;
         let centre = penumbra::level_centre(point.position, point.geometric_normal, lamp, radius);
-        let LevelScratch { nodes, answers } = levels;
+        let LevelScratch {
+            nodes,
+            answers,
+            blockers,
+        } = levels;
+        if blockers.len() <= index {
+            blockers.resize(lights.len(), None);
+        }
+        let blocker = &mut blockers[index];
         nodes.clear();
         level.half_ball(centre, point.geometric_normal, radius, nodes);
         let weights = Weights::new(self.kernel, radius);
@@ -402,7 +410,7 @@ impl LightMesh {
             let (sees, traced) = match known {
                 Some(sees) => (sees, false),
                 None => answers.sees(level, node, index, || {
-                    !world.occluded(&light.shadow_ray(level.node_position(node)))
+                    !world.occluded_near(&light.shadow_ray(level.node_position(node)), blocker)
                 }),
             };
             match traced {
