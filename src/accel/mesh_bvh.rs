@@ -17,7 +17,7 @@ use obvhs::{
 
 use super::node_test::TraversalRay;
 use super::shaft::Shaft;
-use super::traverse::{traverse_binary, traverse_wide, Order};
+use super::traverse::{traverse_binary, traverse_wide, NodeTestPath, Order};
 use super::triangle::WatertightRay;
 use super::wide::WideBvh;
 use super::Ray;
@@ -84,6 +84,9 @@ pub struct MeshBvh {
     /// Vertices in primitive-slot order.
     vertices: Vec<[[f32; 3]; 3]>,
     sources: Vec<TriangleRef>,
+    /// How the wide tree's nodes are tested: the widest this CPU runs,
+    /// found once at build.
+    node_test: NodeTestPath,
 }
 
 impl MeshBvh {
@@ -137,6 +140,7 @@ impl MeshBvh {
             tree,
             vertices,
             sources,
+            node_test: NodeTestPath::detect(),
         }
     }
 
@@ -308,7 +312,7 @@ impl MeshBvh {
         visit: impl FnMut(usize, &mut f32) -> bool,
     ) {
         match &self.tree {
-            Tree::Wide(t) => traverse_wide(t, ray, order, t_cull, visit),
+            Tree::Wide(t) => traverse_wide(t, ray, order, self.node_test, t_cull, visit),
             Tree::Binary(t) => traverse_binary(t, ray, t_cull, visit),
         }
     }
@@ -372,3 +376,6 @@ fn single_threaded<R: Send>(build: impl FnOnce() -> R + Send) -> R {
         }
     }
 }
+
+#[cfg(test)]
+mod node_test_paths;

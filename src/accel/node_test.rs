@@ -5,11 +5,16 @@
 //! reaches it. So every slab interval here is widened by a bound on its own
 //! rounding error (Ize, "Robust BVH Ray Traversal", JCGT 2013), for obvhs'
 //! binary nodes and for the eight-wide nodes of [`wide`](super::wide) alike.
+//! The eight-wide test has a twin for AVX2 ([`avx2`]) that answers bit for
+//! bit alike.
 
 use glam::{BVec3A, Vec3, Vec3A, Vec4};
 use obvhs::aabb::Aabb;
 
 use super::wide::WideNode;
+
+#[cfg(target_arch = "x86_64")]
+mod avx2;
 
 /// `(1 + 2 gamma(3))` of Ize's paper: how far a slab exit may be understated
 /// by the two roundings of `(bound - origin) * inv_dir`, plus the rounding of

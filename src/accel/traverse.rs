@@ -7,7 +7,7 @@
 use obvhs::{bvh2::Bvh2, fast_stack, faststack::FastStack};
 
 use super::node_test::{TraversalRay, BINARY_SCALE};
-use super::wide::{ChildRef, WideBvh};
+use super::wide::{ChildRef, WideBvh, WideNode};
 
 /// Called with a primitive slot (an index into the BVH's
 /// `primitive_indices`) and the culling distance, which it may lower;
@@ -71,13 +71,42 @@ pub enum Order {
     Octant,
 }
 
-/// Walks a wide BVH in `order`. The children a node's test lets through go
-/// onto the stack with their entry `t`, and are skipped when popped beyond a
-/// `t_cull` lowered meanwhile.
+/// Which code tests a wide node's children. Both answer bit for bit alike
+/// (tests compare them); only their speed differs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NodeTestPath {
+    /// [`TraversalRay::enter_children`]: two 128-bit passes, on any CPU.
+    Portable,
+    /// One 256-bit pass, on a CPU found to have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    Avx2(Avx2Detected),
+}
+
+/// Proof that the CPU has AVX2, which the AVX2 walk's safety rests on:
+/// only [`NodeTestPath::detect`] makes one.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Avx2Detected(());
+
+impl NodeTestPath {
+    /// The widest test this CPU runs.
+    pub fn detect() -> NodeTestPath {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            return NodeTestPath::Avx2(Avx2Detected(()));
+        }
+        NodeTestPath::Portable
+    }
+}
+
+/// Walks a wide BVH in `order`, testing nodes by `path`. The children a
+/// node's test lets through go onto the stack with their entry `t`, and
+/// are skipped when popped beyond a `t_cull` lowered meanwhile.
 pub fn traverse_wide(
     bvh: &WideBvh,
     ray: &TraversalRay,
     order: Order,
+    path: NodeTestPath,
     t_cull: f32,
     visit: impl Visit,
 ) {
@@ -88,12 +117,29 @@ pub fn traverse_wide(
     // never holds more than seven per level plus one. Kept on the call stack
     // for the usual depths; zeroing it is part of every ray's cost.
     match 7 * bvh.depth + 1 {
-        n if n <= 64 => walk_wide(bvh, ray, order, t_cull, visit, &mut [Entry::default(); 64]),
-        n if n <= 128 => walk_wide(bvh, ray, order, t_cull, visit, &mut [Entry::default(); 128]),
+        n if n <= 64 => walk_wide(
+            bvh,
+            ray,
+            order,
+            path,
+            t_cull,
+            visit,
+            &mut [Entry::default(); 64],
+        ),
+        n if n <= 128 => walk_wide(
+            bvh,
+            ray,
+            order,
+            path,
+            t_cull,
+            visit,
+            &mut [Entry::default(); 128],
+        ),
         n => walk_wide(
             bvh,
             ray,
             order,
+            path,
             t_cull,
             visit,
             &mut vec![Entry::default(); n],
@@ -101,14 +147,72 @@ pub fn traverse_wide(
     }
 }
 
+/// Runs the walk with the node test `path` asks for.
 #[inline(always)]
 fn walk_wide(
+    bvh: &WideBvh,
+    ray: &TraversalRay,
+    order: Order,
+    path: NodeTestPath,
+    t_cull: f32,
+    visit: impl Visit,
+    stack: &mut [Entry],
+) {
+    #[cfg(target_arch = "x86_64")]
+    if let NodeTestPath::Avx2(_) = path {
+        // SAFETY: the CPU has AVX2: `Avx2Detected` is made only once
+        // `is_x86_feature_detected!` has found it.
+        unsafe { walk_wide_avx2(bvh, ray, order, t_cull, visit, stack) };
+        return;
+    }
+    walk_wide_with(
+        bvh,
+        ray,
+        order,
+        t_cull,
+        visit,
+        stack,
+        |ray, node, t_cull| ray.enter_children(node, t_cull),
+    );
+}
+
+/// The whole walk compiled for AVX2, visitor included, so that the AVX2
+/// node test inlines into its loop (a call per node would cost more than
+/// the wider test saves).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn walk_wide_avx2(
+    bvh: &WideBvh,
+    ray: &TraversalRay,
+    order: Order,
+    t_cull: f32,
+    visit: impl Visit,
+    stack: &mut [Entry],
+) {
+    walk_wide_with(
+        bvh,
+        ray,
+        order,
+        t_cull,
+        visit,
+        stack,
+        |ray, node, t_cull| {
+            // SAFETY: this function runs only where the CPU has AVX2.
+            unsafe { ray.enter_children_avx2(node, t_cull) }
+        },
+    );
+}
+
+/// The walk itself, with `enter_children` as the node test.
+#[inline(always)]
+fn walk_wide_with(
     bvh: &WideBvh,
     ray: &TraversalRay,
     order: Order,
     mut t_cull: f32,
     mut visit: impl Visit,
     stack: &mut [Entry],
+    enter_children: impl Fn(&TraversalRay, &WideNode, f32) -> (u32, [f32; 8]),
 ) {
     stack[0] = Entry::default();
     let mut len = 1;
@@ -129,7 +233,7 @@ fn walk_wide(
             continue;
         }
         let node = &bvh.nodes[child.index as usize];
-        let (hits, entry) = ray.enter_children(node, t_cull);
+        let (hits, entry) = enter_children(ray, node, t_cull);
         let first = len;
         // Children go on in descending rank, so the lowest rank is popped
         // first. Ranked `slot ^ octant`, they come front to back, as obvhs
