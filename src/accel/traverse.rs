@@ -4,10 +4,15 @@
 //! each candidate primitive slot, may lower the culling distance, and may stop
 //! the walk.
 
+use std::mem::MaybeUninit;
+
 use obvhs::{bvh2::Bvh2, fast_stack, faststack::FastStack};
 
 use super::node_test::{TraversalRay, BINARY_SCALE};
 use super::wide::{ChildRef, WideBvh, WideNode};
+use stack::UninitStack;
+
+mod stack;
 
 /// Called with a primitive slot (an index into the BVH's
 /// `primitive_indices`) and the culling distance, which it may lower;
@@ -115,26 +120,12 @@ pub fn traverse_wide(
     }
     // Each node visited pops one entry and pushes at most eight, so the stack
     // never holds more than seven per level plus one. Kept on the call stack
-    // for the usual depths; zeroing it is part of every ray's cost.
+    // for the usual depths, and never cleared (see `stack`).
     match 7 * bvh.depth + 1 {
-        n if n <= 64 => walk_wide(
-            bvh,
-            ray,
-            order,
-            path,
-            t_cull,
-            visit,
-            &mut [Entry::default(); 64],
-        ),
-        n if n <= 128 => walk_wide(
-            bvh,
-            ray,
-            order,
-            path,
-            t_cull,
-            visit,
-            &mut [Entry::default(); 128],
-        ),
+        n if n <= 128 => {
+            let mut slots = [MaybeUninit::uninit(); 128];
+            walk_wide(bvh, ray, order, path, t_cull, visit, &mut slots);
+        }
         n => walk_wide(
             bvh,
             ray,
@@ -142,7 +133,7 @@ pub fn traverse_wide(
             path,
             t_cull,
             visit,
-            &mut vec![Entry::default(); n],
+            &mut vec![MaybeUninit::uninit(); n],
         ),
     }
 }
@@ -156,13 +147,13 @@ fn walk_wide(
     path: NodeTestPath,
     t_cull: f32,
     visit: impl Visit,
-    stack: &mut [Entry],
+    slots: &mut [MaybeUninit<Entry>],
 ) {
     #[cfg(target_arch = "x86_64")]
     if let NodeTestPath::Avx2(_) = path {
         // SAFETY: the CPU has AVX2: `Avx2Detected` is made only once
         // `is_x86_feature_detected!` has found it.
-        unsafe { walk_wide_avx2(bvh, ray, order, t_cull, visit, stack) };
+        unsafe { walk_wide_avx2(bvh, ray, order, t_cull, visit, slots) };
         return;
     }
     walk_wide_with(
@@ -171,7 +162,7 @@ fn walk_wide(
         order,
         t_cull,
         visit,
-        stack,
+        slots,
         |ray, node, t_cull| ray.enter_children(node, t_cull),
     );
 }
@@ -187,7 +178,7 @@ fn walk_wide_avx2(
     order: Order,
     t_cull: f32,
     visit: impl Visit,
-    stack: &mut [Entry],
+    slots: &mut [MaybeUninit<Entry>],
 ) {
     walk_wide_with(
         bvh,
@@ -195,7 +186,7 @@ fn walk_wide_avx2(
         order,
         t_cull,
         visit,
-        stack,
+        slots,
         |ray, node, t_cull| {
             // SAFETY: this function runs only where the CPU has AVX2.
             unsafe { ray.enter_children_avx2(node, t_cull) }
@@ -211,14 +202,12 @@ fn walk_wide_with(
     order: Order,
     mut t_cull: f32,
     mut visit: impl Visit,
-    stack: &mut [Entry],
+    slots: &mut [MaybeUninit<Entry>],
     enter_children: impl Fn(&TraversalRay, &WideNode, f32) -> (u32, [f32; 8]),
 ) {
-    stack[0] = Entry::default();
-    let mut len = 1;
-    while len > 0 {
-        len -= 1;
-        let Entry { child, t } = stack[len];
+    let mut stack = UninitStack::new(slots);
+    stack.push(Entry::ROOT);
+    while let Some(Entry { child, t }) = stack.pop() {
         if t > t_cull * BINARY_SCALE {
             continue;
         }
@@ -234,7 +223,7 @@ fn walk_wide_with(
         }
         let node = &bvh.nodes[child.index as usize];
         let (hits, entry) = enter_children(ray, node, t_cull);
-        let first = len;
+        let first = stack.len();
         // Children go on in descending rank, so the lowest rank is popped
         // first. Ranked `slot ^ octant`, they come front to back, as obvhs
         // placed them in their slots for the ray's octant; ranked by slot,
@@ -253,14 +242,13 @@ fn walk_wide_with(
                 index: node.child[slot],
                 prim_count: u32::from(node.prim_count[slot]),
             };
-            stack[len] = Entry {
+            stack.push(Entry {
                 child,
                 t: entry[slot],
-            };
-            len += 1;
+            });
         }
         if order == Order::Nearest {
-            sort_far_to_near(&mut stack[first..len]);
+            sort_far_to_near(stack.pushed_since(first));
         }
     }
 }
@@ -294,8 +282,19 @@ fn sort_far_to_near(pushed: &mut [Entry]) {
 }
 
 /// A child waiting on the stack of [`walk_wide`], with its entry `t`.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 struct Entry {
     child: ChildRef,
     t: f32,
+}
+
+impl Entry {
+    /// Where every walk starts: node 0, entered at 0.
+    const ROOT: Entry = Entry {
+        child: ChildRef {
+            index: 0,
+            prim_count: 0,
+        },
+        t: 0.0,
+    };
 }
