@@ -74,6 +74,12 @@ impl TraversalRay {
         }
     }
 
+    /// Whether the direction is exactly zero along some axis, which only
+    /// the portable tests handle.
+    pub fn has_parallel_axis(&self) -> bool {
+        self.parallel.any()
+    }
+
     /// Entry `t` of the box if the ray meets it in `[0, t_cull]` (widened by
     /// the rounding bound), else `None`.
     #[inline(always)]

@@ -9,9 +9,14 @@ use std::mem::MaybeUninit;
 use obvhs::{bvh2::Bvh2, fast_stack, faststack::FastStack};
 
 use super::node_test::{TraversalRay, BINARY_SCALE};
-use super::wide::{ChildRef, WideBvh, WideNode};
+use super::wide::{ChildRef, WideBvh};
+#[cfg(target_arch = "x86_64")]
+use node_test_path::Avx2Test;
+pub use node_test_path::NodeTestPath;
+use node_test_path::{ChildTest, PortableTest};
 use stack::UninitStack;
 
+mod node_test_path;
 mod stack;
 
 /// Called with a primitive slot (an index into the BVH's
@@ -76,34 +81,6 @@ pub enum Order {
     Octant,
 }
 
-/// Which code tests a wide node's children. Both answer bit for bit alike
-/// (tests compare them); only their speed differs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum NodeTestPath {
-    /// [`TraversalRay::enter_children`]: two 128-bit passes, on any CPU.
-    Portable,
-    /// One 256-bit pass, on a CPU found to have AVX2.
-    #[cfg(target_arch = "x86_64")]
-    Avx2(Avx2Detected),
-}
-
-/// Proof that the CPU has AVX2, which the AVX2 walk's safety rests on:
-/// only [`NodeTestPath::detect`] makes one.
-#[cfg(target_arch = "x86_64")]
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Avx2Detected(());
-
-impl NodeTestPath {
-    /// The widest test this CPU runs.
-    pub fn detect() -> NodeTestPath {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            return NodeTestPath::Avx2(Avx2Detected(()));
-        }
-        NodeTestPath::Portable
-    }
-}
-
 /// Walks a wide BVH in `order`, testing nodes by `path`. The children a
 /// node's test lets through go onto the stack with their entry `t`, and
 /// are skipped when popped beyond a `t_cull` lowered meanwhile.
@@ -149,22 +126,17 @@ fn walk_wide(
     visit: impl Visit,
     slots: &mut [MaybeUninit<Entry>],
 ) {
-    #[cfg(target_arch = "x86_64")]
-    if let NodeTestPath::Avx2(_) = path {
-        // SAFETY: the CPU has AVX2: `Avx2Detected` is made only once
-        // `is_x86_feature_detected!` has found it.
-        unsafe { walk_wide_avx2(bvh, ray, order, t_cull, visit, slots) };
-        return;
+    match path {
+        // Rays parallel to an axis need the portable test's exact fix-up,
+        // so they take the portable walk as a whole.
+        #[cfg(target_arch = "x86_64")]
+        NodeTestPath::Avx2(detected) if !ray.has_parallel_axis() => {
+            let test = Avx2Test(detected);
+            // SAFETY: `detected` proves that the CPU has AVX2.
+            unsafe { walk_wide_avx2(bvh, ray, order, t_cull, visit, slots, test) }
+        }
+        _ => walk_wide_with(bvh, ray, order, t_cull, visit, slots, PortableTest),
     }
-    walk_wide_with(
-        bvh,
-        ray,
-        order,
-        t_cull,
-        visit,
-        slots,
-        |ray, node, t_cull| ray.enter_children(node, t_cull),
-    );
 }
 
 /// The whole walk compiled for AVX2, visitor included, so that the AVX2
@@ -179,22 +151,12 @@ fn walk_wide_avx2(
     t_cull: f32,
     visit: impl Visit,
     slots: &mut [MaybeUninit<Entry>],
+    test: Avx2Test,
 ) {
-    walk_wide_with(
-        bvh,
-        ray,
-        order,
-        t_cull,
-        visit,
-        slots,
-        |ray, node, t_cull| {
-            // SAFETY: this function runs only where the CPU has AVX2.
-            unsafe { ray.enter_children_avx2(node, t_cull) }
-        },
-    );
+    walk_wide_with(bvh, ray, order, t_cull, visit, slots, test);
 }
 
-/// The walk itself, with `enter_children` as the node test.
+/// The walk itself, with `test` as the node test.
 #[inline(always)]
 fn walk_wide_with(
     bvh: &WideBvh,
@@ -203,7 +165,7 @@ fn walk_wide_with(
     mut t_cull: f32,
     mut visit: impl Visit,
     slots: &mut [MaybeUninit<Entry>],
-    enter_children: impl Fn(&TraversalRay, &WideNode, f32) -> (u32, [f32; 8]),
+    test: impl ChildTest,
 ) {
     let mut stack = UninitStack::new(slots);
     stack.push(Entry::ROOT);
@@ -222,7 +184,7 @@ fn walk_wide_with(
             continue;
         }
         let node = &bvh.nodes[child.index as usize];
-        let (hits, entry) = enter_children(ray, node, t_cull);
+        let (hits, entry) = test.enter_children(ray, node, t_cull);
         let first = stack.len();
         // Children go on in descending rank, so the lowest rank is popped
         // first. Ranked `slot ^ octant`, they come front to back, as obvhs

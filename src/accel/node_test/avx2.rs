@@ -23,17 +23,16 @@ use super::{TraversalRay, BINARY_SCALE};
 use crate::accel::wide::WideNode;
 
 impl TraversalRay {
-    /// [`TraversalRay::enter_children`], eight lanes at once. Rays parallel
-    /// to an axis take the portable test (their exact slab fix-up is rare
-    /// and not worth a second copy).
+    /// [`TraversalRay::enter_children`], eight lanes at once, for rays
+    /// with no axis-parallel direction: those need the portable test's
+    /// exact slab fix-up, rare and not worth a second copy (and checking
+    /// for it once per ray rather than per node keeps this loop short).
     ///
     /// # Safety
     /// The CPU must have AVX2.
     #[inline(always)]
     pub unsafe fn enter_children_avx2(&self, node: &WideNode, t_cull: f32) -> (u32, [f32; 8]) {
-        if self.parallel.any() {
-            return self.enter_children(node, t_cull);
-        }
+        debug_assert!(!self.has_parallel_axis());
         let t_cull = _mm256_set1_ps(t_cull * BINARY_SCALE);
         let mut near = _mm256_setzero_ps();
         let mut far = _mm256_set1_ps(f32::INFINITY);
