@@ -17,10 +17,13 @@ use obvhs::{
 
 use super::node_test::TraversalRay;
 use super::shaft::Shaft;
-use super::traverse::{traverse_binary, traverse_wide, NodeTestPath, Order};
+use super::traverse::{traverse_binary, traverse_wide, NodeTestPath, Order, Visit};
 use super::triangle::WatertightRay;
 use super::wide::WideBvh;
 use super::Ray;
+use hit_visitors::{AnyHit, ClosestHit};
+
+mod hit_visitors;
 
 /// Where a stored triangle came from: the object's index in the slice the
 /// world was built from, and the triangle's index in that object.
@@ -199,39 +202,20 @@ impl MeshBvh {
     /// closer (ties by [`TriangleRef`]). `ray` is in this BVH's space;
     /// `best.t` must be comparable, i.e. measured along the same parameter.
     pub fn closest_hit(&self, ray: &Ray, best: &mut Option<MeshHit>) {
-        let exact = WatertightRay::new(ray.origin, ray.direction, ray.t_max);
         let traversal = TraversalRay::new(ray.origin, ray.direction);
         let t_cull = best.map_or(ray.t_max, |b| b.t);
-        self.walk(&traversal, Order::Nearest, t_cull, |slot, t_cull| {
-            let [a, b, c] = &self.vertices[slot];
-            if let Some(hit) = exact.intersect(a, b, c) {
-                let candidate = MeshHit {
-                    t: hit.t,
-                    source: self.sources[slot],
-                    barycentric: hit.barycentric,
-                    normal: normal(&self.vertices[slot]),
-                };
-                if candidate.precedes(best) {
-                    *best = Some(candidate);
-                    *t_cull = hit.t;
-                }
-            }
-            true
-        });
+        let visitor = ClosestHit {
+            mesh: self,
+            exact: WatertightRay::new(ray.origin, ray.direction, ray.t_max),
+            best,
+        };
+        self.walk(&traversal, Order::Nearest, t_cull, visitor);
     }
 
     /// Whether anything lies on the ray in `(0, t_max)`; stops at the first
     /// hit found.
     pub fn occluded(&self, ray: &Ray) -> bool {
-        let exact = WatertightRay::new(ray.origin, ray.direction, ray.t_max);
-        let traversal = TraversalRay::new(ray.origin, ray.direction);
-        let mut hit = false;
-        self.walk(&traversal, Order::Octant, ray.t_max, |slot, _| {
-            let [a, b, c] = &self.vertices[slot];
-            hit = exact.intersect(a, b, c).is_some();
-            !hit
-        });
-        hit
+        self.occluder(ray, None).is_some()
     }
 
     /// The slot of a triangle on the ray in `(0, t_max)`, or None when
@@ -250,13 +234,12 @@ impl MeshBvh {
         }
         let traversal = TraversalRay::new(ray.origin, ray.direction);
         let mut found = None;
-        self.walk(&traversal, Order::Octant, ray.t_max, |slot, _| {
-            let [a, b, c] = &self.vertices[slot];
-            if exact.intersect(a, b, c).is_some() {
-                found = Some(slot as u32);
-            }
-            found.is_none()
-        });
+        let visitor = AnyHit {
+            vertices: &self.vertices,
+            exact,
+            found: &mut found,
+        };
+        self.walk(&traversal, Order::Octant, ray.t_max, visitor);
         found
     }
 
@@ -304,13 +287,7 @@ impl MeshBvh {
 
     /// Visits candidate slots; `order` applies to the wide layout (the
     /// binary one always goes near child first).
-    fn walk(
-        &self,
-        ray: &TraversalRay,
-        order: Order,
-        t_cull: f32,
-        visit: impl FnMut(usize, &mut f32) -> bool,
-    ) {
+    fn walk(&self, ray: &TraversalRay, order: Order, t_cull: f32, visit: impl Visit) {
         match &self.tree {
             Tree::Wide(t) => traverse_wide(t, ray, order, self.node_test, t_cull, visit),
             Tree::Binary(t) => traverse_binary(t, ray, t_cull, visit),

@@ -21,9 +21,19 @@ mod stack;
 
 /// Called with a primitive slot (an index into the BVH's
 /// `primitive_indices`) and the culling distance, which it may lower;
-/// returns `false` to end the traversal.
-pub trait Visit: FnMut(usize, &mut f32) -> bool {}
-impl<F: FnMut(usize, &mut f32) -> bool> Visit for F {}
+/// returns `false` to end the traversal. Closures are visitors; the mesh
+/// queries' own are structs, whose `#[inline(always)]` visit inlines into
+/// the walk's loop where a closure stays a call.
+pub trait Visit {
+    fn visit(&mut self, slot: usize, t_cull: &mut f32) -> bool;
+}
+
+impl<F: FnMut(usize, &mut f32) -> bool> Visit for F {
+    #[inline(always)]
+    fn visit(&mut self, slot: usize, t_cull: &mut f32) -> bool {
+        self(slot, t_cull)
+    }
+}
 
 /// Walks a binary BVH near child first. Boxes entered beyond `t_cull`
 /// (inclusive, so ties at equal `t` are still visited) are skipped.
@@ -35,7 +45,7 @@ pub fn traverse_binary(bvh: &Bvh2, ray: &TraversalRay, mut t_cull: f32, mut visi
         return;
     }
     let mut visit_leaf = |first: u32, count: u32, t_cull: &mut f32| {
-        (first..first + count).all(|slot| visit(slot as usize, t_cull))
+        (first..first + count).all(|slot| visit.visit(slot as usize, t_cull))
     };
     if root.is_leaf() {
         visit_leaf(root.first_index, root.prim_count, &mut t_cull);
@@ -177,7 +187,7 @@ fn walk_wide_with(
             let slots = child.index..child.index + child.prim_count;
             if !slots
                 .into_iter()
-                .all(|slot| visit(slot as usize, &mut t_cull))
+                .all(|slot| visit.visit(slot as usize, &mut t_cull))
             {
                 return;
             }

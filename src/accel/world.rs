@@ -445,7 +445,7 @@ impl TopLevel {
             return;
         }
         let traversal = TraversalRay::new(ray.origin, ray.direction);
-        traverse_binary(&self.bvh, &traversal, t_cull, |slot, t_cull| {
+        traverse_binary(&self.bvh, &traversal, t_cull, |slot, t_cull: &mut f32| {
             visit(
                 self.members[self.bvh.primitive_indices[slot] as usize],
                 t_cull,
