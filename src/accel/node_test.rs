@@ -76,6 +76,7 @@ impl TraversalRay {
 
     /// Whether the direction is exactly zero along some axis, which only
     /// the portable tests handle.
+    #[inline]
     pub fn has_parallel_axis(&self) -> bool {
         self.parallel.any()
     }
@@ -87,7 +88,7 @@ impl TraversalRay {
         let t1 = (aabb.min - self.origin) * self.inv_direction;
         let t2 = (aabb.max - self.origin) * self.inv_direction;
         let (mut near, mut far) = (t1.min(t2), t1.max(t2));
-        if self.parallel.any() {
+        if self.has_parallel_axis() {
             // Inside a slab (faces included) it never leaves; outside it never
             // enters.
             let inside = aabb.min.cmple(self.origin) & self.origin.cmple(aabb.max);
@@ -115,7 +116,7 @@ impl TraversalRay {
                 let slab = |plane: Vec4| (plane - self.origin4[k]) * self.inv_direction4[k];
                 (slab(planes[side][half]), slab(planes[side ^ 1][half]))
             });
-            if self.parallel.any() {
+            if self.has_parallel_axis() {
                 // As in `enter_box`, for four boxes at once.
                 for (k, (near, far)) in slabs.iter_mut().enumerate() {
                     if self.parallel.test(k) {
