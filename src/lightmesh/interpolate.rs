@@ -308,6 +308,12 @@ impl LightMesh {
             Kernel::Box => 1,
             Kernel::Smooth => kernel.weight(self.lattice.distance_squared(node, point.position)),
         }));
+        // Σ w_k: with the box kernel, m; with the smooth one, zero only
+        // when every node lies on the rim. An empty set reads no masks.
+        let total = weights.iter().sum();
+        if total == 0 {
+            return 0;
+        }
 
         // Where every node agrees (far from shadow edges, the common case)
         // a light is fully visible or fully hidden; only lights the nodes
@@ -332,9 +338,7 @@ impl LightMesh {
                 any[word] |= seen;
             }
         }
-        // Σ w_k: with the box kernel, m; with the smooth one, zero only
-        // when every node lies on the rim.
-        weights.iter().sum()
+        total
     }
 
     /// The share of light `at.light` at `at.point` by its blocker's
