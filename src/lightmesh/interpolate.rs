@@ -14,6 +14,7 @@ use glam::IVec3;
 use super::agreement::Agreement;
 use super::enclosure::blocks_some;
 use super::kernel::{Kernel, Weights};
+use super::lamp_disk;
 use super::masks::BrickCache;
 use super::penumbra::{self, LevelScratch, Penumbra};
 use super::{LightMesh, LightMeshStats};
@@ -389,7 +390,6 @@ impl LightMesh {
         };
         let radius = self.ki * level.h;
         let lamp = light.position()?;
-        let centre = penumbra::level_centre(point.position, point.geometric_normal, lamp, radius);
         let LevelScratch {
             nodes,
             answers,
@@ -399,15 +399,21 @@ impl LightMesh {
             blockers.resize(lights.len(), None);
         }
         let blocker = &mut blockers[index];
-        nodes.clear();
-        level.half_ball(centre, point.geometric_normal, radius, nodes);
+        lamp_disk::disk_nodes(
+            level,
+            point.position,
+            point.geometric_normal,
+            lamp,
+            radius,
+            nodes,
+        );
         let weights = Weights::new(self.kernel, radius);
         // Level k ≥ 0's node n is the mesh's node n·2^k, at the same
         // position to the bit (scaling by a power of two is exact).
         let mesh_steps = (level.h >= self.lattice.h).then(|| (level.h / self.lattice.h) as i32);
         let (mut total, mut seen) = (0u32, 0u32);
-        for &node in nodes.iter() {
-            let weight = weights.weight(level.distance_squared(node, centre));
+        for &(node, distance_squared) in nodes.iter() {
+            let weight = weights.weight(distance_squared);
             total += weight;
             let mesh_node = mesh_steps.and_then(|steps| scaled_node(node, steps));
             let known = mesh_node.and_then(|node| known_sight(bricks, node, index));

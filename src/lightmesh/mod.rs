@@ -17,6 +17,7 @@ pub mod fill;
 pub mod interpolate;
 pub mod invalidate;
 pub mod kernel;
+pub(crate) mod lamp_disk;
 pub mod lattice;
 pub mod masks;
 pub mod penumbra;

@@ -19,14 +19,13 @@
 //!
 //! A half-ball of the light mesh's own step h resolves one width of
 //! penumbra well, 2·kI·h: with fewer nodes its shares turn coarse, and it
-//! cannot reach further. So the light's share is interpolated over the
-//! half-ball of the lattice level whose radius kI·h_k comes nearest r_i,
-//! h_k = h·2^k for k from [`FINEST_LEVEL`] to [`COARSEST_LEVEL`] (the
-//! levels share the mesh's origin, so a coarser level's nodes are nodes
-//! of the mesh): narrow at a contact, wide far from the occluder. The
-//! level's half-ball is moved towards the lamp along the surface
-//! ([`level_centre`]), since its nodes stand above the surface. A level
-//! node's answer is its segment's to the light: read from the mesh's
+//! cannot reach further. So the light's share is taken over the nodes of
+//! the lattice level whose radius kI·h_k comes nearest r_i, h_k = h·2^k
+//! for k from [`FINEST_LEVEL`] to [`COARSEST_LEVEL`] (the levels share
+//! the mesh's origin, so a coarser level's nodes are nodes of the mesh):
+//! narrow at a contact, wide far from the occluder. Those nodes sample the
+//! lamp's disk as the point sees it, a disk of radius kI·h_k across the
+//! light's direction (`super::lamp_disk`). A level node's answer is its segment's to the light: read from the mesh's
 //! masks where the node is the mesh's and its bit is known, remembered
 //! from a neighbouring point ([`LevelScratch`]), or traced; nothing is
 //! kept between frames. Below the finest level the light is taken as
@@ -132,31 +131,6 @@ pub fn level(mesh_lattice: Lattice, ki: f32, radius: f32) -> Option<Lattice> {
     })
 }
 
-/// A half-ball's mean height above its plane, in radii (3/8).
-const MEAN_HEIGHT: f32 = 0.375;
-
-/// Where the level's half-ball of `radius` is centred for the point at
-/// `p` (normal `n`) and a lamp at `lamp`. A node at height y above the
-/// surface sees the lamp along a line that meets the surface y·tan θ
-/// further from the lamp (θ the lamp's angle from the normal): a
-/// half-ball centred on the point samples the shadow as it lies that far
-/// away, so the penumbra comes out displaced into the lit side and a
-/// contact's umbra ends early. Moving the centre along the surface
-/// towards the lamp by the nodes' mean height times tan θ (at most the
-/// radius, at grazing incidence) puts the samples' footprint back on the
-/// point (STUDY.md measured it: the boxes' penumbra error fell by 30–46%).
-pub fn level_centre(p: Vec3, n: Vec3, lamp: Vec3, radius: f32) -> Vec3 {
-    let to_lamp = lamp - p;
-    let along = to_lamp.dot(n);
-    let across = to_lamp - n * along;
-    let across_length = across.length();
-    if along <= 0.0 || across_length == 0.0 {
-        return p;
-    }
-    let shift = (MEAN_HEIGHT * radius * across_length / along).min(radius);
-    p + across * (shift / across_length)
-}
-
 /// 2^`exponent`, exactly (from its bits: `exp2` need not be exact).
 fn power_of_two(exponent: i32) -> f32 {
     f32::from_bits(((127 + exponent) as u32) << 23)
@@ -169,7 +143,7 @@ fn power_of_two(exponent: i32) -> f32 {
 /// one triangle test instead of a walk, with the walk's answer).
 #[derive(Default)]
 pub struct LevelScratch {
-    pub nodes: Vec<IVec3>,
+    pub nodes: Vec<(IVec3, f32)>,
     pub answers: LevelAnswers,
     pub blockers: Vec<Option<StaticTriangle>>,
 }
@@ -253,24 +227,6 @@ fn blocker_distance(ray: &Ray, centre: Vec3, world: &World) -> Option<(f32, f32)
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_level_centre_moves_towards_the_lamp_by_the_mean_height_times_tan_theta() {
-        let (p, up) = (Vec3::new(1.0, 0.0, 2.0), Vec3::Y);
-        // Straight above: tan θ = 0.
-        assert_eq!(level_centre(p, up, p + Vec3::Y * 3.0, 0.2), p);
-        // At 45°: 3/8 of the radius, towards the lamp along the surface.
-        let centre = level_centre(p, up, p + Vec3::new(2.0, 2.0, 0.0), 0.2);
-        assert!((centre - (p + Vec3::X * 0.075)).length() < 1e-6, "{centre}");
-        // Grazing: at most the radius; at or below the horizon: unmoved.
-        let grazing = level_centre(p, up, p + Vec3::new(0.0, 1e-6, -5.0), 0.2);
-        assert!((grazing - (p - Vec3::Z * 0.2)).length() < 1e-6, "{grazing}");
-        assert_eq!(level_centre(p, up, p + Vec3::X * 5.0, 0.2), p);
-        assert_eq!(level_centre(p, up, p - Vec3::Y, 0.2), p);
-        // Huge coordinates stay finite.
-        let far = Vec3::splat(3.0e7);
-        assert!(level_centre(far, up, far + Vec3::new(1.0, 1.0, 0.0), 0.2).is_finite());
-    }
 
     #[test]
     fn a_level_node_is_traced_once_per_light_and_level_until_the_scratch_fills() {

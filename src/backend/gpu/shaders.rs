@@ -263,6 +263,34 @@ mod tests {
         }
     }
 
+    /// The shader's lamp disk is the CPU's, point for point and bit for
+    /// bit: both backends ask the same level nodes.
+    #[test]
+    fn the_shader_samples_the_lamp_disk_at_the_cpus_points() {
+        use crate::lightmesh::lamp_disk::DISK;
+        let shader = include_str!("shaders/light_mesh.wgsl");
+        let list = shader
+            .split_once("const DISK = array<vec2<f32>, 32>(")
+            .and_then(|(_, rest)| rest.split_once(");"))
+            .expect("light_mesh.wgsl's DISK")
+            .0;
+        let points: Vec<(f32, f32)> = (list.split("vec2<f32>(").skip(1))
+            .map(|point| {
+                let (x, rest) = point.split_once(',').expect("x, y");
+                let y = rest.split_once(')').expect("y)").0;
+                (x.trim().parse().expect("x"), y.trim().parse().expect("y"))
+            })
+            .collect();
+        let bits = |points: &[(f32, f32)]| -> Vec<(u32, u32)> {
+            points
+                .iter()
+                .map(|&(x, y)| (x.to_bits(), y.to_bits()))
+                .collect()
+        };
+        assert_eq!(bits(&points), bits(&DISK));
+        assert!(shader.contains(&format!("const DISK_SAMPLES: u32 = {}u;", DISK.len())));
+    }
+
     /// The WGSL structs have the sizes of the Rust records uploaded into
     /// them, field offsets included: a layout drift fails here, not as
     /// garbage on the GPU.

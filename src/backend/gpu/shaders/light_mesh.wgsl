@@ -202,21 +202,81 @@ fn blocker_hit(start: vec3<f32>, centre: vec3<f32>) -> BlockerHit {
     return BlockerHit(true, mul(best.t, distance), distance);
 }
 
-// `penumbra::level_centre`: the level's half-ball moved along the surface
-// towards the lamp by its nodes' mean height (3/8 of the radius) times
-// tan θ, at most the radius.
-const MEAN_HEIGHT: f32 = 0.375;
+// `lamp_disk::DISK`: the same points, written as the same f32 values.
+const DISK_SAMPLES: u32 = 32u;
+const DISK = array<vec2<f32>, 32>(
+    vec2<f32>(0.125, 0.0),
+    vec2<f32>(-0.15964505, 0.14624794),
+    vec2<f32>(0.024436234, -0.27843827),
+    vec2<f32>(0.20122224, 0.26245877),
+    vec2<f32>(-0.36926755, -0.065318234),
+    vec2<f32>(0.34980246, -0.2225157),
+    vec2<f32>(-0.11700208, 0.4352419),
+    vec2<f32>(-0.22313565, -0.42963412),
+    vec2<f32>(0.48411512, 0.17679806),
+    vec2<f32>(-0.5036411, 0.20789573),
+    vec2<f32>(0.2427883, -0.51882446),
+    vec2<f32>(0.17941438, 0.5720013),
+    vec2<f32>(-0.540757, -0.31337973),
+    vec2<f32>(0.63436955, -0.13946436),
+    vec2<f32>(-0.38714585, 0.55067515),
+    vec2<f32>(-0.08943965, -0.6901997),
+    vec2<f32>(0.5490717, 0.46275827),
+    vec2<f32>(-0.7388785, 0.030554945),
+    vec2<f32>(0.53895515, -0.5363323),
+    vec2<f32>(-0.036058187, 0.77979153),
+    vec2<f32>(-0.51281756, -0.6145268),
+    vec2<f32>(0.8123596, 0.109301835),
+    vec2<f32>(-0.6883106, 0.47890863),
+    vec2<f32>(0.18808606, -0.83606136),
+    vec2<f32>(0.43503326, 0.75919104),
+    vec2<f32>(-0.8504484, -0.27131623),
+    vec2<f32>(0.8261024, -0.38168025),
+    vec2<f32>(-0.3578882, 0.8551556),
+    vec2<f32>(-0.31940734, -0.88803375),
+    vec2<f32>(0.84990865, 0.44668815),
+    vec2<f32>(-0.94403464, 0.2488445),
+    vec2<f32>(0.5365958, -0.83452976),
+);
 
-fn level_centre(p: vec3<f32>, n: vec3<f32>, lamp: vec3<f32>, radius: f32) -> vec3<f32> {
-    let to_lamp = lamp - p;
-    let along = dot3(to_lamp, n);
-    let across = to_lamp - scale3(n, along);
-    let across_length = root(dot3(across, across));
-    if along <= 0.0 || across_length == 0.0 {
-        return p;
+// `Vec3::cross` as glam rounds it.
+fn cross3(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(
+        mul(a.y, b.z) - mul(b.y, a.z),
+        mul(a.z, b.x) - mul(b.z, a.x),
+        mul(a.x, b.y) - mul(b.x, a.y),
+    );
+}
+
+// `lamp_disk::disk_axes`: two unit vectors across `light` and each other.
+struct DiskAxes {
+    across: vec3<f32>,
+    up: vec3<f32>,
+}
+
+fn disk_axes(light: vec3<f32>) -> DiskAxes {
+    let magnitude = abs(light);
+    var axis = vec3<f32>(0.0, 0.0, 1.0);
+    if magnitude.x <= magnitude.y && magnitude.x <= magnitude.z {
+        axis = vec3<f32>(1.0, 0.0, 0.0);
+    } else if magnitude.y <= magnitude.z {
+        axis = vec3<f32>(0.0, 1.0, 0.0);
     }
-    let shift = min(div(mul(mul(MEAN_HEIGHT, radius), across_length), along), radius);
-    return p + scale3(across, div(shift, across_length));
+    let across = cross3(light, axis);
+    let unit_across = scale3(across, div(1.0, root(dot3(across, across))));
+    return DiskAxes(unit_across, cross3(light, unit_across));
+}
+
+// `lamp_disk::disk_nodes`, one sample: the level node (step `h`) nearest
+// sample `offset` of the lamp's disk seen from `p`, lifted along `light`
+// until it stands a step above the surface, at most `furthest`.
+fn disk_node(p: vec3<f32>, n: vec3<f32>, light: vec3<f32>, cosine: f32, furthest: f32, offset: vec3<f32>, h: f32) -> vec3<i32> {
+    var lift = div(h - dot3(offset, n), cosine);
+    lift = select(0.0, lift, lift > 0.0);
+    lift = select(lift, furthest, furthest < lift);
+    let from_origin = ((p + offset) + scale3(light, lift)) - directory.header.origin;
+    let local = vec3<f32>(div(from_origin.x, h), div(from_origin.y, h), div(from_origin.z, h));
+    return vec3<i32>(floor(local + vec3<f32>(0.5)));
 }
 
 // Whether node `a` comes before `b` in coordinates (x, then y, then z).
@@ -288,13 +348,22 @@ fn blocker_share(point: ShadePoint, ball: HalfBall, origin: vec3<f32>, word: u32
     let inverse_radius_squared = div(1.0, mul(level_radius, level_radius));
     var total = 0u;
     var seen = 0u;
-    let centre = level_centre(point.position, point.geometric_normal, light.origin, level_radius);
-    var level_nodes = walk(half_ball_at(centre, point.geometric_normal, h, level_radius));
-    while next_node(&level_nodes) {
-        let weight = node_weight_at(level_nodes.distance_squared, inverse_radius_squared);
+    // `lamp_disk::disk_nodes`.
+    let to_lamp = light.origin - point.position;
+    let distance = root(dot3(to_lamp, to_lamp));
+    let toward = scale3(to_lamp, div(1.0, distance));
+    let axes = disk_axes(toward);
+    let cosine = lane_max(dot3(toward, point.geometric_normal), MIN_POSITIVE);
+    let furthest = mul(0.5, distance);
+    var disk = DISK;
+    for (var sample = 0u; sample < DISK_SAMPLES; sample++) {
+        let at = disk[sample];
+        let offset = scale3(axes.across, mul(level_radius, at.x)) + scale3(axes.up, mul(level_radius, at.y));
+        let node = disk_node(point.position, point.geometric_normal, toward, cosine, furthest, offset, h);
+        let weight = node_weight_at(dot3(offset, offset), inverse_radius_squared);
         total += weight;
         rays += 1u;
-        if !shadowed(node_position_at(level_nodes.node, h), light) {
+        if !shadowed(node_position_at(node, h), light) {
             seen += weight;
         }
     }

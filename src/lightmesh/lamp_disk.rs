@@ -1,0 +1,221 @@
+//! The level nodes that stand for a lamp's disk as a shading point sees it.
+//!
+//! A spherical lamp of radius R at distance D, behind an occluder's edge
+//! at distance z from the point, is hidden from the point on the part of
+//! its disk beyond the edge. A node offset from the point by v, across the
+//! light's direction, sees the lamp's centre past that edge where the
+//! point sees the lamp's point v·(D − z)/z: the nodes on the disk of
+//! radius r = R·z/(D − z) across the light's direction, each asking
+//! whether it sees the lamp's centre, sample the lamp's disk as the point
+//! sees it. That is the disk `penumbra::level` sizes.
+//!
+//! A half-ball on the surface samples it only where the light falls
+//! straight down: tilted, its nodes stand above the surface and see the
+//! shadow where it lies further from the lamp, and half the disk (the
+//! part towards the surface) is missing. So the samples are the disk's,
+//! spread over it by a fixed pattern ([`DISK`]); a sample under the
+//! surface, or too close to it for its nearest node to be above, is moved
+//! along the light's direction, which does not change the line it sees
+//! the lamp along, until it stands a level step above the surface. Each
+//! sample's nearest level node answers for it, so neighbouring points ask
+//! the same nodes (their answers are remembered, `penumbra::LevelAnswers`)
+//! and the GPU, doing the same arithmetic, asks the same ones.
+//!
+//! STUDY.md measured it against the half-ball moved towards the lamp that
+//! it replaces: the boxes' penumbra error fell from 0.38/0.27/0.39 of
+//! Whitted's to 0.24/0.15/0.29; the other scenes did not move.
+
+use glam::{IVec3, Vec3};
+
+use super::lattice::Lattice;
+
+/// Points spread evenly over the unit disk, a Vogel spiral: point i at
+/// radius √((i + ½)/N) and angle i times the golden angle. Written as the
+/// f32 values both backends read (`light_mesh.wgsl` holds the same list).
+pub const DISK: [(f32, f32); 32] = [
+    (0.125, 0.0),
+    (-0.15964505, 0.14624794),
+    (0.024436234, -0.27843827),
+    (0.20122224, 0.26245877),
+    (-0.36926755, -0.065318234),
+    (0.34980246, -0.2225157),
+    (-0.11700208, 0.4352419),
+    (-0.22313565, -0.42963412),
+    (0.48411512, 0.17679806),
+    (-0.5036411, 0.20789573),
+    (0.2427883, -0.51882446),
+    (0.17941438, 0.5720013),
+    (-0.540757, -0.31337973),
+    (0.63436955, -0.13946436),
+    (-0.38714585, 0.55067515),
+    (-0.08943965, -0.6901997),
+    (0.5490717, 0.46275827),
+    (-0.7388785, 0.030554945),
+    (0.53895515, -0.5363323),
+    (-0.036058187, 0.77979153),
+    (-0.51281756, -0.6145268),
+    (0.8123596, 0.109301835),
+    (-0.6883106, 0.47890863),
+    (0.18808606, -0.83606136),
+    (0.43503326, 0.75919104),
+    (-0.8504484, -0.27131623),
+    (0.8261024, -0.38168025),
+    (-0.3578882, 0.8551556),
+    (-0.31940734, -0.88803375),
+    (0.84990865, 0.44668815),
+    (-0.94403464, 0.2488445),
+    (0.5365958, -0.83452976),
+];
+
+/// The level nodes standing for the lamp centred at `lamp`, of radius
+/// `radius` across the light's direction, seen from `p` on a surface of
+/// normal `n`, into `out` with each sample's squared distance from the
+/// disk's centre (the kernel's weight is of that distance). One entry per
+/// sample of [`DISK`]: a node nearest two samples counts twice.
+pub fn disk_nodes(
+    level: Lattice,
+    p: Vec3,
+    n: Vec3,
+    lamp: Vec3,
+    radius: f32,
+    out: &mut Vec<(IVec3, f32)>,
+) {
+    out.clear();
+    let to_lamp = lamp - p;
+    let distance = to_lamp.length();
+    let light = to_lamp * (1.0 / distance);
+    let (across, up) = disk_axes(light);
+    // Near the horizon the lift grows as 1/cosine: no sample moves past
+    // half the way to the lamp.
+    let cosine = light.dot(n).max(f32::MIN_POSITIVE);
+    let furthest = 0.5 * distance;
+    for &(x, y) in DISK.iter() {
+        let offset = across * (radius * x) + up * (radius * y);
+        let lift = ((level.h - offset.dot(n)) / cosine).max(0.0).min(furthest);
+        let sample = (p + offset) + light * lift;
+        let node = (level.local(sample) + Vec3::splat(0.5)).floor().as_ivec3();
+        out.push((node, offset.length_squared()));
+    }
+}
+
+/// Two unit vectors across `light` (a unit vector), at right angles: the
+/// first across `light` and the axis `light` is least along (ties to x,
+/// then y), the second across both.
+fn disk_axes(light: Vec3) -> (Vec3, Vec3) {
+    let magnitude = light.abs();
+    let axis = if magnitude.x <= magnitude.y && magnitude.x <= magnitude.z {
+        Vec3::X
+    } else if magnitude.y <= magnitude.z {
+        Vec3::Y
+    } else {
+        Vec3::Z
+    };
+    let across = light.cross(axis);
+    let across = across * (1.0 / across.length());
+    (across, light.cross(across))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_disk_pattern_covers_the_unit_disk_evenly() {
+        let radii: Vec<f32> = DISK.iter().map(|&(x, y)| (x * x + y * y).sqrt()).collect();
+        assert!(radii.windows(2).all(|pair| pair[0] < pair[1]), "{radii:?}");
+        assert!(radii[0] > 0.1 && radii[DISK.len() - 1] < 1.0);
+        // Each ring of equal area holds as many points: a quarter of the
+        // disk's area within radius 1/2.
+        let inner = radii.iter().filter(|&&radius| radius < 0.5).count();
+        assert_eq!(inner, DISK.len() / 4);
+        let (sx, sy) = DISK
+            .iter()
+            .fold((0.0, 0.0), |(sx, sy), &(x, y)| (sx + x, sy + y));
+        let centroid = (sx / DISK.len() as f32, sy / DISK.len() as f32);
+        assert!(
+            centroid.0.abs() < 0.02 && centroid.1.abs() < 0.02,
+            "{centroid:?}"
+        );
+    }
+
+    /// Node `node`'s distance from the line through `p` towards `lamp`.
+    fn from_the_line(level: Lattice, node: IVec3, p: Vec3, lamp: Vec3) -> f32 {
+        let light = (lamp - p).normalize();
+        let d = level.node_position(node) - p;
+        (d - light * d.dot(light)).length()
+    }
+
+    #[test]
+    fn samples_stand_above_the_surface_within_the_disk_around_the_line_to_the_lamp() {
+        let level = Lattice::new(0.05);
+        let radius = 2.5 * level.h;
+        let snap = level.h * 3f32.sqrt() / 2.0;
+        let mut nodes = Vec::new();
+        let p = Vec3::new(0.31, 0.0, -0.12);
+        // Straight above, at 45° and at 80° from the normal, on a floor
+        // on a lattice plane and on a tilted roof.
+        let floor = (Vec3::new(0.31, level.origin.y, -0.12), Vec3::Y);
+        let roof = (p, Vec3::new(0.3, 0.9, -0.2).normalize());
+        for (p, n) in [floor, roof] {
+            for lamp in [
+                p + n * 3.0,
+                p + Vec3::new(2.0, 2.0, 0.5),
+                p + Vec3::new(5.0, 0.9, -1.0),
+            ] {
+                disk_nodes(level, p, n, lamp, radius, &mut nodes);
+                assert_eq!(nodes.len(), DISK.len());
+                for &(node, distance_squared) in &nodes {
+                    let height = (level.node_position(node) - p).dot(n);
+                    assert!(height > 0.0, "{node} under the surface, lamp {lamp}");
+                    assert!(distance_squared <= radius * radius * 1.0001);
+                    let off_line = from_the_line(level, node, p, lamp);
+                    assert!(off_line <= radius + snap, "{off_line} from the line");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_disk_is_across_the_light_and_its_samples_differ() {
+        let level = Lattice::new(0.02);
+        let mut nodes = Vec::new();
+        let p = Vec3::new(1.0, 2.0, 3.0);
+        let lamp = p + Vec3::new(-1.0, 4.0, 2.0);
+        disk_nodes(level, p, Vec3::Y, lamp, 0.2, &mut nodes);
+        let mut distinct: Vec<IVec3> = nodes.iter().map(|&(node, _)| node).collect();
+        distinct.sort_by_key(|node| node.to_array());
+        distinct.dedup();
+        // Samples 3.5 cm apart or more, nodes 2 cm apart: all distinct.
+        assert_eq!(distinct.len(), DISK.len());
+        // The axes are unit vectors at right angles, across the light.
+        for light in [Vec3::X, Vec3::new(0.0, -1.0, 0.0), (lamp - p).normalize()] {
+            let (across, up) = disk_axes(light);
+            for (a, b) in [(across, light), (up, light), (across, up)] {
+                assert!(a.dot(b).abs() < 1e-6);
+            }
+            assert!((across.length() - 1.0).abs() < 1e-6 && (up.length() - 1.0).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn degenerate_and_huge_inputs_give_nodes_without_panicking() {
+        let level = Lattice::new(0.1);
+        let mut nodes = Vec::new();
+        let far = Vec3::splat(3.0e7);
+        disk_nodes(
+            level,
+            far,
+            Vec3::Y,
+            far + Vec3::new(1.0, 1.0, 0.0),
+            0.25,
+            &mut nodes,
+        );
+        assert_eq!(nodes.len(), DISK.len());
+        // A lamp at the point itself or under the surface, a NaN radius.
+        let p = Vec3::new(0.5, 0.0, 0.5);
+        for (lamp, radius) in [(p, 0.25), (p - Vec3::Y, 0.25), (p + Vec3::Y, f32::NAN)] {
+            disk_nodes(level, p, Vec3::Y, lamp, radius, &mut nodes);
+            assert_eq!(nodes.len(), DISK.len());
+        }
+    }
+}
