@@ -343,7 +343,7 @@ impl LightMesh {
     }
 
     /// The share of light `at.light` at `at.point` by its blocker's
-    /// distance ([`penumbra`]): over the half-ball of the lattice level
+    /// distance ([`penumbra`]): over the lamp disk of the lattice level
     /// that the light's penumbra wants there, or the centre ray's answer
     /// where the penumbra is too narrow for any level; its rays go to
     /// `counts`. A level node's answer is its segment's: read from the

@@ -115,7 +115,7 @@ pub struct LightMeshStats {
     pub fallback_points: u64,
     /// Rays of `lightmesh.penumbra: blocker`, per point and light its
     /// nodes disagree on: one or two closest-hit rays to find the blocker,
-    /// and one segment per node of the lattice level's half-ball.
+    /// and one segment per node of the lattice level's lamp disk.
     pub blocker_rays: u64,
     /// Level segments of `blocker` the CPU backend answered without a
     /// ray: from the mesh's masks, or as a neighbouring point of the same

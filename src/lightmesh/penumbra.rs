@@ -137,7 +137,7 @@ fn power_of_two(exponent: i32) -> f32 {
 }
 
 /// One thread's working space for the lattice levels: the nodes of the
-/// level half-ball at hand, the answers its points' segments gave, and
+/// lamp disk at hand (`super::lamp_disk`), the answers its points' segments gave, and
 /// per light the static triangle its last blocked segment crossed (the
 /// next segments to that light, from nodes close by, mostly cross it too:
 /// one triangle test instead of a walk, with the walk's answer).

@@ -291,7 +291,7 @@ fn coordinates_before(a: vec3<i32>, b: vec3<i32>) -> bool {
 }
 
 // `LightMesh::blocker_share`: the share of `light` (bit `bit` of word
-// `word`) over the half-ball of the lattice level its penumbra wants at
+// `word`) over the lamp disk of the lattice level its penumbra wants at
 // the point, found from the blocker of the centre ray or of the set's
 // nearest blocked node, each level node's segment traced.
 fn blocker_share(point: ShadePoint, ball: HalfBall, origin: vec3<f32>, word: u32, bit: u32, light: Light) -> BlockerShare {
