@@ -110,8 +110,7 @@ fn disk_axes(light: Vec3) -> (Vec3, Vec3) {
     } else {
         Vec3::Z
     };
-    let across = light.cross(axis);
-    let across = across * (1.0 / across.length());
+    let across = light.cross(axis).normalize();
     (across, light.cross(across))
 }
 

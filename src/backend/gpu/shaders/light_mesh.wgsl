@@ -239,15 +239,6 @@ const DISK = array<vec2<f32>, 32>(
     vec2<f32>(0.5365958, -0.83452976),
 );
 
-// `Vec3::cross` as glam rounds it.
-fn cross3(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(
-        mul(a.y, b.z) - mul(b.y, a.z),
-        mul(a.z, b.x) - mul(b.z, a.x),
-        mul(a.x, b.y) - mul(b.x, a.y),
-    );
-}
-
 // `lamp_disk::disk_axes`: two unit vectors across `light` and each other.
 struct DiskAxes {
     across: vec3<f32>,
@@ -262,9 +253,8 @@ fn disk_axes(light: vec3<f32>) -> DiskAxes {
     } else if magnitude.y <= magnitude.z {
         axis = vec3<f32>(0.0, 1.0, 0.0);
     }
-    let across = cross3(light, axis);
-    let unit_across = scale3(across, div(1.0, root(dot3(across, across))));
-    return DiskAxes(unit_across, cross3(light, unit_across));
+    let across = normalize3(cross3(light, axis));
+    return DiskAxes(across, cross3(light, across));
 }
 
 // `lamp_disk::disk_nodes`, one sample: the level node (step `h`) nearest
@@ -274,9 +264,8 @@ fn disk_node(p: vec3<f32>, n: vec3<f32>, light: vec3<f32>, cosine: f32, furthest
     var lift = div(h - dot3(offset, n), cosine);
     lift = select(0.0, lift, lift > 0.0);
     lift = select(lift, furthest, furthest < lift);
-    let from_origin = ((p + offset) + scale3(light, lift)) - directory.header.origin;
-    let local = vec3<f32>(div(from_origin.x, h), div(from_origin.y, h), div(from_origin.z, h));
-    return vec3<i32>(floor(local + vec3<f32>(0.5)));
+    let sample = (p + offset) + scale3(light, lift);
+    return vec3<i32>(floor(lattice_local(sample, h) + vec3<f32>(0.5)));
 }
 
 // Whether node `a` comes before `b` in coordinates (x, then y, then z).

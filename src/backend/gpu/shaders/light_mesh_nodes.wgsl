@@ -58,8 +58,7 @@ fn half_ball(p: vec3<f32>, n: vec3<f32>) -> HalfBall {
 // The half-ball of `radius` on the lattice of step `h`.
 fn half_ball_at(p: vec3<f32>, n: vec3<f32>, h: f32, radius: f32) -> HalfBall {
     let origin = directory.header.origin;
-    let from_origin = p - origin;
-    let local = vec3<f32>(div(from_origin.x, h), div(from_origin.y, h), div(from_origin.z, h));
+    let local = lattice_local(p, h);
     let reach_steps = div(radius, h);
     let low = vec3<i32>(ceil(local - vec3<f32>(reach_steps)));
     let high = vec3<i32>(floor(local + vec3<f32>(reach_steps)));
@@ -68,6 +67,12 @@ fn half_ball_at(p: vec3<f32>, n: vec3<f32>, h: f32, radius: f32) -> HalfBall {
     let magnitude = (max_abs(p) + max_abs(origin)) + radius;
     let on_plane = mul(ON_PLANE_EPSILONS, magnitude);
     return HalfBall(p, n, h, low, span, mul(radius, radius), on_plane);
+}
+
+// `Lattice::local`: `p` in steps `h` from the origin, fractional.
+fn lattice_local(p: vec3<f32>, h: f32) -> vec3<f32> {
+    let from_origin = p - directory.header.origin;
+    return vec3<f32>(div(from_origin.x, h), div(from_origin.y, h), div(from_origin.z, h));
 }
 
 fn max_abs(v: vec3<f32>) -> f32 {

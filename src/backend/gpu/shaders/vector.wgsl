@@ -22,6 +22,15 @@ fn scale3(v: vec3<f32>, s: f32) -> vec3<f32> {
     return vec3<f32>(mul(v.x, s), mul(v.y, s), mul(v.z, s));
 }
 
+// `Vec3::cross` as glam rounds it.
+fn cross3(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(
+        mul(a.y, b.z) - mul(b.y, a.z),
+        mul(a.z, b.x) - mul(b.z, a.x),
+        mul(a.x, b.y) - mul(b.x, a.y),
+    );
+}
+
 // `Vec3 * Vec3`, component by component.
 fn mul3(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(mul(a.x, b.x), mul(a.y, b.y), mul(a.z, b.z));
