@@ -375,7 +375,7 @@ impl MeshStage<'_> {
         }
 
         let mesh = &*mesh;
-        let scratch = || Scratch::new(mesh);
+        let scratch = || Scratch::new(mesh, lights);
         Ok(shade_stage(
             points,
             &job.environment,

@@ -47,6 +47,8 @@ const CAPACITY: usize = 1 << 14;
 /// Per-thread summaries of what tiles, and the nodes around them, agree on.
 pub struct Agreement {
     lattice: Lattice,
+    /// Mesh steps per step of `lattice`: its node n is the mesh's n·steps.
+    steps: i32,
     /// Nodes beyond a point's cell that its half-ball may hold, per side:
     /// the radius in steps rounded down, and one more for the rounding of
     /// the half-ball's bounds.
@@ -59,13 +61,15 @@ pub struct Agreement {
 }
 
 impl Agreement {
-    /// Summaries for half-balls of `radius` on `lattice`, with `words`
-    /// words of light bits.
-    pub fn new(lattice: Lattice, radius: f32, words: usize) -> Agreement {
+    /// Summaries for half-balls of `radius` on `lattice`, a lattice of
+    /// `steps` mesh steps with the mesh's origin (1: the mesh's own), with
+    /// `words` words of light bits.
+    pub fn new(lattice: Lattice, radius: f32, steps: i32, words: usize) -> Agreement {
         // In steps, as `Lattice::half_ball` rounds it.
         let reach = radius / lattice.h;
         Agreement {
             lattice,
+            steps,
             margin: reach.floor() as i32 + 1,
             usable: reach >= SMALLEST_KI,
             own: Summaries::new(words),
@@ -146,7 +150,7 @@ impl Agreement {
         for z in 0..TILE_EDGE {
             for y in 0..TILE_EDGE {
                 for x in 0..TILE_EDGE {
-                    let node = tile * TILE_EDGE + IVec3::new(x, y, z);
+                    let node = (tile * TILE_EDGE + IVec3::new(x, y, z)) * self.steps;
                     let enclosed = bricks.is_enclosed(node);
                     let Some(mask) = bricks.mask(node) else {
                         continue;
@@ -271,9 +275,9 @@ mod tests {
 
     fn store() -> MaskStore {
         let mut store = MaskStore::new(70);
-        for z in -12..=12 {
-            for y in -12..=12 {
-                for x in -12..=12 {
+        for z in -16..=16 {
+            for y in -16..=16 {
+                for x in -16..=16 {
                     let node = IVec3::new(x, y, z);
                     let inside = y <= ENCLOSED_BELOW_Y;
                     store.set(node, 0, !inside, Some(false));
@@ -295,9 +299,10 @@ mod tests {
 
     /// What walking the point's set finds, as `interpolate` walks it: the
     /// lights of `reach` every node sees and those some node sees, or None
-    /// for an empty set.
+    /// for an empty set. The set is a half-ball on `lattice`, a lattice of
+    /// `steps` mesh steps.
     fn walked(
-        lattice: Lattice,
+        (lattice, steps): (Lattice, i32),
         radius: f32,
         bricks: &mut BrickCache,
         (p, n): (Vec3, Vec3),
@@ -305,6 +310,9 @@ mod tests {
     ) -> Option<(Vec<u64>, Vec<u64>)> {
         let mut nodes = Vec::new();
         lattice.half_ball(p, n, radius, &mut nodes);
+        for node in &mut nodes {
+            *node *= steps;
+        }
         nodes.retain(|&node| {
             !(bricks.is_enclosed(node) && bricks.mask(node).is_some_and(|m| blocks_some(&m, reach)))
         });
@@ -370,30 +378,43 @@ mod tests {
     #[test]
     fn a_settled_point_gets_what_walking_its_set_finds() {
         let store = store();
-        let lattice = Lattice::new(H);
-        let radius = 2.5 * H;
-        let mut agreement = Agreement::new(lattice, radius, store.words());
-        let mut bricks = BrickCache::new(&store);
-        let (mut settled, mut walked_only) = (0, 0);
-        for (i, point) in points(lattice, 4000).into_iter().enumerate() {
-            let reach = reach_of(i % 16);
-            let mut seen = [0; 2];
-            let walk = walked(lattice, radius, &mut bricks, point, &reach);
-            if agreement.settle(point.0, &reach, &mut bricks, &mut seen) {
-                settled += 1;
-                let (all, any) = walk.expect("a settled point's set is never empty");
-                assert_eq!(all, any, "{point:?}: its nodes disagree");
-                assert_eq!(seen.to_vec(), all, "{point:?}");
-            } else {
-                walked_only += 1;
+        let mesh = Lattice::new(H);
+        // The mesh's own half-balls, and the wide set's (`super::wide`):
+        // every other node, twice the radius.
+        for steps in [1, 2] {
+            let lattice = Lattice {
+                origin: mesh.origin,
+                h: H * steps as f32,
+            };
+            let radius = 2.5 * lattice.h;
+            let mut agreement = Agreement::new(lattice, radius, steps, store.words());
+            let mut bricks = BrickCache::new(&store);
+            let (mut settled, mut walked_only) = (0, 0);
+            let points = points(lattice, 4000).into_iter().map(|(p, n)| {
+                // The same mesh cells for both lattices.
+                (mesh.origin + (p - mesh.origin) / steps as f32, n)
+            });
+            for (i, point) in points.enumerate() {
+                let reach = reach_of(i % 16);
+                let mut seen = [0; 2];
+                let walk = walked((lattice, steps), radius, &mut bricks, point, &reach);
+                if agreement.settle(point.0, &reach, &mut bricks, &mut seen) {
+                    settled += 1;
+                    let (all, any) = walk.expect("a settled point's set is never empty");
+                    assert_eq!(all, any, "{point:?}: its nodes disagree");
+                    assert_eq!(seen.to_vec(), all, "{point:?}");
+                } else {
+                    walked_only += 1;
+                }
             }
+            // Both ways are taken: points near the edge at x = 3, the plane
+            // z = 1 or the enclosed block walk; the others are settled
+            // (fewer of the wide sets, which reach further).
+            assert!(
+                settled > 400 && walked_only > 400,
+                "{steps} steps: {settled} / {walked_only}"
+            );
         }
-        // Both ways are taken: points near the edge at x = 3, the plane
-        // z = 1 or the enclosed block walk; the others are settled.
-        assert!(
-            settled > 500 && walked_only > 500,
-            "{settled} / {walked_only}"
-        );
     }
 
     #[test]
@@ -401,7 +422,7 @@ mod tests {
         let store = store();
         let lattice = Lattice::new(H);
         let mut bricks = BrickCache::new(&store);
-        let mut agreement = Agreement::new(lattice, 2.5 * H, store.words());
+        let mut agreement = Agreement::new(lattice, 2.5 * H, 1, store.words());
         let far = lattice.origin + Vec3::new(0.5, 0.5, 0.5) * H;
         let reach = reach_of(0b0101);
         let mut first = [0; 2];
@@ -426,9 +447,9 @@ mod tests {
         let reach = reach_of(0b0001);
         let inside = lattice.origin + Vec3::new(0.5, 0.5, 0.5) * H;
         // Below kI = 2 a half-ball may hold no node: formula (1) decides.
-        let mut small = Agreement::new(lattice, 1.9 * H, store.words());
+        let mut small = Agreement::new(lattice, 1.9 * H, 1, store.words());
         assert!(!small.settle(inside, &reach, &mut bricks, &mut [0; 2]));
-        let mut agreement = Agreement::new(lattice, 2.5 * H, store.words());
+        let mut agreement = Agreement::new(lattice, 2.5 * H, 1, store.words());
         assert!(agreement.settle(inside, &reach, &mut bricks, &mut [0; 2]));
         for beyond in [
             Vec3::splat(1e30),

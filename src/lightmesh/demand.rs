@@ -9,6 +9,8 @@ use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
 use super::masks::{parity, split, BRICK_NODES};
+use super::penumbra::Penumbra;
+use super::wide::{self, WideBall};
 use super::{LightMesh, LightMeshError};
 use crate::render::omega::{LightLanes, PointLanes, LANES};
 use crate::render::surface::ShadingPoint;
@@ -105,7 +107,9 @@ impl BrickTables {
 
 impl LightMesh {
     /// What `points` need: reaching lights per point and needed bits per
-    /// node, in bricks. The tables grow with the number of distinct bricks
+    /// node, in bricks: each point's half-ball for its lights and, where
+    /// penumbrae are sized by their blocker, its wide set for its lamps
+    /// (`super::wide`). The tables grow with the number of distinct bricks
     /// the points touch, so their size is checked against the memory limit
     /// as they grow: a lattice far too fine for the view is refused here,
     /// before it can exhaust memory.
@@ -124,6 +128,8 @@ impl LightMesh {
         let table_bytes = BRICK_NODES * words * std::mem::size_of::<u64>();
         let brick_limit = self.memory_limit / table_bytes;
         let too_large = |bricks: usize| self.too_large(bricks.saturating_mul(table_bytes));
+        let wide = (self.penumbra == Penumbra::Blocker)
+            .then(|| (WideBall::of(self), wide::lamps(lights.lights(), words)));
         let tables = points
             .par_chunks(CHUNK)
             .zip(reach.par_chunks(CHUNK * words))
@@ -131,6 +137,7 @@ impl LightMesh {
                 || BrickTables::new(words),
                 |mut tables, (chunk, chunk_reach)| {
                     let mut nodes = Vec::new();
+                    let mut lamps_reached = vec![0; words];
                     for (point, point_reach) in chunk.iter().zip(chunk_reach.chunks(words)) {
                         if point_reach.iter().all(|&word| word == 0) {
                             continue;
@@ -144,6 +151,22 @@ impl LightMesh {
                         );
                         for &node in &nodes {
                             tables.need(node, point_reach);
+                        }
+                        let Some((ball, lamps)) = &wide else {
+                            continue;
+                        };
+                        for (reached, (&reach, &lamp)) in
+                            lamps_reached.iter_mut().zip(point_reach.iter().zip(lamps))
+                        {
+                            *reached = reach & lamp;
+                        }
+                        if lamps_reached.iter().all(|&word| word == 0) {
+                            continue;
+                        }
+                        nodes.clear();
+                        ball.nodes(point.position, point.geometric_normal, &mut nodes);
+                        for &node in &nodes {
+                            tables.need(node, &lamps_reached);
                         }
                     }
                     match tables.bricks.len() {

@@ -17,6 +17,7 @@ use super::kernel::{Kernel, Weights};
 use super::lamp_disk;
 use super::masks::BrickCache;
 use super::penumbra::{self, LevelScratch, Penumbra};
+use super::wide::WideScratch;
 use super::{LightMesh, LightMeshStats};
 use crate::accel::offset::offset_ray_origin;
 use crate::accel::{Ray, World};
@@ -80,15 +81,19 @@ pub struct Scratch<'a> {
     levels: LevelScratch,
     /// What the nodes around each tile agree on (LMM1).
     agreement: Agreement,
+    /// The points' wide sets (`penumbra: blocker`).
+    wide: WideScratch,
     bricks: BrickCache<'a>,
 }
 
 impl<'a> Scratch<'a> {
-    pub fn new(mesh: &'a LightMesh) -> Scratch<'a> {
+    /// Scratch for shading with `mesh` under the frame's `lights`.
+    pub fn new(mesh: &'a LightMesh, lights: &[RenderLight]) -> Scratch<'a> {
         Scratch {
             set: InterpolationSet::default(),
             levels: LevelScratch::default(),
-            agreement: Agreement::new(mesh.lattice, mesh.radius(), mesh.masks().words()),
+            agreement: Agreement::new(mesh.lattice, mesh.radius(), 1, mesh.masks().words()),
+            wide: WideScratch::new(mesh, lights),
             bricks: BrickCache::new(mesh.masks()),
         }
     }
@@ -156,6 +161,7 @@ impl LightMesh {
             set,
             levels,
             agreement,
+            wide,
             bricks,
         } = scratch;
         set.all.clear();
@@ -195,11 +201,22 @@ impl LightMesh {
             any,
         } = set;
         let words = reach.len();
+        // The lamps the point's own set agrees on but its wide set does
+        // not: it lies in their penumbra, beyond the set's reach.
+        wide.look(
+            (point.position, point.geometric_normal),
+            reach,
+            (all, any),
+            bricks,
+        );
+        let wide = &*wide;
 
         // Omega eight lights at a time, for the blocks where some node sees
-        // a light; the sum runs in light order.
+        // a light or the wide set disagrees on it; the sum runs in light
+        // order.
         let at = PointLanes::new(point);
         for (word, &lit) in any.iter().enumerate() {
+            let lit = lit | wide.mixed(word);
             for block_in_word in 0..64 / LANES {
                 let first = block_in_word * LANES;
                 let lit_lanes = (lit >> first) as u8;
@@ -210,43 +227,58 @@ impl LightMesh {
                 for lane in set_bits((lit_lanes & omega.reaching).into()) {
                     let bit = first + lane;
                     let light = word * 64 + bit;
-                    if all[word] >> bit & 1 == 1 {
-                        terms.add(light, omega.get(lane));
-                        continue;
-                    }
-                    // The nodes disagree on this light: the point is in
-                    // its penumbra, or near it.
-                    let sees = || {
-                        (visible.iter().skip(word).step_by(words))
-                            .map(move |&seen| seen >> bit & 1 == 1)
+                    let seen_by_all = all[word] >> bit & 1 == 1;
+                    let penumbra_at = PenumbraAt {
+                        point,
+                        lights: lights.lights(),
+                        light,
+                        world,
                     };
-                    let fixed = || {
-                        let seen: u32 = (sees().zip(weights.iter()))
-                            .filter(|&(sees, _)| sees)
-                            .map(|(_, &weight)| weight)
-                            .sum();
-                        Share::Part(seen as f32 / total as f32)
+                    let share = if wide.mixed(word) >> bit & 1 == 1 {
+                        // The point's own nodes agree: their answer stands
+                        // where nothing sizes the penumbra.
+                        let set = wide.seen_from(light).map(|(node, sees)| SetNode {
+                            node,
+                            distance_squared: self.lattice.distance_squared(node, point.position),
+                            sees,
+                        });
+                        let agreed = match seen_by_all {
+                            true => Share::Full,
+                            false => Share::Hidden,
+                        };
+                        self.blocker_share(penumbra_at, set, levels, bricks, &mut counts)
+                            .unwrap_or(agreed)
+                    } else if seen_by_all {
+                        Share::Full
+                    } else {
+                        // The nodes disagree on this light: the point is in
+                        // its penumbra, or near it.
+                        let sees = || {
+                            (visible.iter().skip(word).step_by(words))
+                                .map(move |&seen| seen >> bit & 1 == 1)
+                        };
+                        let fixed = || {
+                            let seen: u32 = (sees().zip(weights.iter()))
+                                .filter(|&(sees, _)| sees)
+                                .map(|(_, &weight)| weight)
+                                .sum();
+                            Share::Part(seen as f32 / total as f32)
+                        };
+                        let by_blocker = match self.penumbra {
+                            Penumbra::Blocker => {
+                                let set = nodes.iter().zip(sees()).map(|(&node, sees)| SetNode {
+                                    node,
+                                    distance_squared: self
+                                        .lattice
+                                        .distance_squared(node, point.position),
+                                    sees,
+                                });
+                                self.blocker_share(penumbra_at, set, levels, bricks, &mut counts)
+                            }
+                            Penumbra::Fixed => None,
+                        };
+                        by_blocker.unwrap_or_else(fixed)
                     };
-                    let by_blocker = match self.penumbra {
-                        Penumbra::Blocker => {
-                            let set = nodes.iter().zip(sees()).map(|(&node, sees)| SetNode {
-                                node,
-                                distance_squared: self
-                                    .lattice
-                                    .distance_squared(node, point.position),
-                                sees,
-                            });
-                            let at = PenumbraAt {
-                                point,
-                                lights: lights.lights(),
-                                light,
-                                world,
-                            };
-                            self.blocker_share(at, set, levels, bricks, &mut counts)
-                        }
-                        Penumbra::Fixed => None,
-                    };
-                    let share = by_blocker.unwrap_or_else(fixed);
                     match share {
                         Share::Full => terms.add(light, omega.get(lane)),
                         Share::Part(share) => terms.add(light, omega.get(lane) * share),

@@ -25,6 +25,7 @@ pub mod persistent;
 mod region_tree;
 pub mod segments;
 pub mod spacing;
+mod wide;
 
 use serde::Serialize;
 

@@ -77,6 +77,48 @@ fn is_kept(place: u32) -> bool {
     return (kept_bits[place / 32u] >> (place % 32u) & 1u) == 1u;
 }
 
+// Whether the wide set keeps the node whose mask is `mask`: not an
+// enclosed node blocked from a lamp the set was demanded for (the point's
+// reaching lamps). Inside closed geometry most lights are blocked, so the
+// first blocked one mostly settles it.
+fn wide_kept(mask: NodeMask, reach_base: u32) -> bool {
+    if !mask.enclosed {
+        return true;
+    }
+    for (var word = 0u; word < directory.header.light_words; word++) {
+        var blocked = reach[reach_base + word] & valid(mask, word) & ~visible(mask, word);
+        while blocked != 0u {
+            let bit = firstTrailingBit(blocked);
+            blocked &= blocked - 1u;
+            if is_lamp(lights[word * 32u + bit]) {
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
+// `WideScratch::look`, word `word`: the lamps of `asked` on which the wide
+// set's kept nodes disagree.
+fn wide_disagreements(ball: HalfBall, reach_base: u32, word: u32, asked: u32) -> u32 {
+    if asked == 0u {
+        return 0u;
+    }
+    var all = asked;
+    var any = 0u;
+    var nodes = walk(ball);
+    while next_node(&nodes) {
+        let mask = node_mask(nodes.node);
+        if !wide_kept(mask, reach_base) {
+            continue;
+        }
+        let seen = visible(mask, word) & asked;
+        all &= seen;
+        any |= seen;
+    }
+    return any & ~all;
+}
+
 // Bits of the per-light counters: a half-ball of at most `MAX_KI` steps
 // holds fewer than 2^12 nodes, each weighing less than 2^12.
 const COUNTER_BITS: u32 = 24u;
@@ -279,36 +321,60 @@ fn coordinates_before(a: vec3<i32>, b: vec3<i32>) -> bool {
     return a.z < b.z;
 }
 
-// `LightMesh::blocker_share`: the share of `light` (bit `bit` of word
-// `word`) over the lamp disk of the lattice level its penumbra wants at
-// the point, found from the blocker of the centre ray or of the set's
-// nearest blocked node, each level node's segment traced.
-fn blocker_share(point: ShadePoint, ball: HalfBall, origin: vec3<f32>, word: u32, bit: u32, light: Light) -> BlockerShare {
-    if light.directional != 0u || light.lamp_radius <= 0.0 {
-        return BlockerShare(SHARE_FIXED, 0.0, 0u);
+// Per light of the word being shaded, the set's blocked node nearest the
+// point, ties to the least coordinates (`LightMesh::blocker_share`): a
+// bit of `nearest_found` per light that has one.
+var<private> nearest_found: u32;
+var<private> nearest_node: array<vec3<i32>, 32>;
+var<private> nearest_distance: array<f32, 32>;
+
+// Finds, in one walk of the set, the nearest blocked node of each light of
+// `wanted` (bits of word `word`). The set is the point's own (`ball`'s
+// kept nodes) or, with `wide`, its wide set. One walk for all of them
+// instead of one per light keeps a point with many lamps in its penumbrae
+// within lavapipe's loop budget (`loops_were_cut_short`).
+fn find_nearest_blocked(ball: HalfBall, wide: bool, reach_base: u32, word: u32, wanted: u32) {
+    if wanted == 0u {
+        return;
     }
-    // The set's blocked node nearest the point, ties to the least
-    // coordinates.
-    var found = false;
-    var nearest = vec3<i32>(0);
-    var nearest_distance = 0.0;
     var place = 0u;
     var nodes = walk(ball);
     while next_node(&nodes) {
         let here = place;
         place += 1u;
-        if !is_kept(here) || (visible(node_mask(nodes.node), word) >> bit & 1u) != 0u {
+        let mask = node_mask(nodes.node);
+        var kept = is_kept(here);
+        if wide {
+            kept = wide_kept(mask, reach_base);
+        }
+        if !kept {
             continue;
         }
-        let closer = nodes.distance_squared < nearest_distance
-            || (nodes.distance_squared == nearest_distance && coordinates_before(nodes.node, nearest));
-        if !found || closer {
-            found = true;
-            nearest = nodes.node;
-            nearest_distance = nodes.distance_squared;
+        var blocked = wanted & ~visible(mask, word);
+        while blocked != 0u {
+            let bit = firstTrailingBit(blocked);
+            blocked &= blocked - 1u;
+            let closer = nodes.distance_squared < nearest_distance[bit]
+                || (nodes.distance_squared == nearest_distance[bit] && coordinates_before(nodes.node, nearest_node[bit]));
+            if (nearest_found >> bit & 1u) == 0u || closer {
+                nearest_found |= 1u << bit;
+                nearest_node[bit] = nodes.node;
+                nearest_distance[bit] = nodes.distance_squared;
+            }
         }
     }
-    let nearest_blocked = select(point.position, node_position(nearest), found);
+}
+
+// `LightMesh::blocker_share`: the share of `light` (bit `bit` of the
+// word) over the lamp disk of the lattice level its penumbra wants at the
+// point, found from the blocker of the centre ray or of the set's nearest
+// blocked node (`find_nearest_blocked`), each level node's segment traced.
+fn blocker_share(point: ShadePoint, origin: vec3<f32>, bit: u32, light: Light) -> BlockerShare {
+    if !is_lamp(light) {
+        return BlockerShare(SHARE_FIXED, 0.0, 0u);
+    }
+    let found = (nearest_found >> bit & 1u) != 0u;
+    let nearest_blocked = select(point.position, node_position(nearest_node[bit]), found);
     var blocker = blocker_hit(origin, light.origin);
     let centre_visible = !blocker.found;
     if centre_visible {
@@ -400,6 +466,7 @@ fn shade(index: u32) {
     begin_terms(index);
     let point = shade_point(surface);
     let ball = half_ball(point.position, point.geometric_normal);
+    let wide_ball = half_ball_at(point.position, point.geometric_normal, WIDE_STEPS);
     let origin = offset_ray_origin(point.position, point.geometric_normal);
     let light_words = directory.header.light_words;
     let reach_base = index * light_words;
@@ -425,7 +492,15 @@ fn shade(index: u32) {
             direct[index].other_rays = tests;
             direct[index].class_rays = first.class_rays;
         }
-        var lit = t.any;
+        // The lamps the set agrees on and the wide set does not; the
+        // nearest blocked node of those and of the lamps the set disagrees
+        // on.
+        let lamps = reach[reach_base + word] & lamp_bits(word);
+        let wide = wide_disagreements(wide_ball, reach_base, word, lamps & (t.all | ~t.any));
+        nearest_found = 0u;
+        find_nearest_blocked(ball, false, reach_base, word, lamps & t.any & ~t.all);
+        find_nearest_blocked(wide_ball, true, reach_base, word, wide);
+        var lit = t.any | wide;
         while lit != 0u {
             let bit = firstTrailingBit(lit);
             lit &= lit - 1u;
@@ -435,11 +510,22 @@ fn shade(index: u32) {
                 continue;
             }
             var term = value;
-            if (t.all >> bit & 1u) == 0u {
+            if (wide >> bit & 1u) != 0u {
+                // Where nothing sizes the penumbra the set's answer stands.
+                let share = blocker_share(point, origin, bit, light);
+                blocker_rays += share.rays;
+                let agreed_hidden = share.kind == SHARE_FIXED && (t.all >> bit & 1u) == 0u;
+                if share.kind == SHARE_HIDDEN || agreed_hidden {
+                    continue;
+                }
+                if share.kind == SHARE_PART {
+                    term = scale3(value, share.share);
+                }
+            } else if (t.all >> bit & 1u) == 0u {
                 // The nodes disagree on this light.
                 var share = BlockerShare(SHARE_FIXED, 0.0, 0u);
                 if directory.header.blocker_penumbra != 0u {
-                    share = blocker_share(point, ball, origin, word, bit, light);
+                    share = blocker_share(point, origin, bit, light);
                     blocker_rays += share.rays;
                 }
                 if share.kind == SHARE_HIDDEN {

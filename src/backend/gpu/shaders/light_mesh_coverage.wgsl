@@ -17,18 +17,22 @@
 // Whether the pool holds every bit of `reach` (from `base`) that formula
 // (2) will read at `node`.
 fn serves(mask: NodeMask, base: u32, light_words: u32) -> bool {
-    if !mask.found {
-        return false;
-    }
-    var blocked = 0u;
     for (var word = 0u; word < light_words; word++) {
-        let wanted = reach[base + word];
-        let valid_bits = valid(mask, word);
-        if (valid_bits & wanted) != wanted {
+        if !serves_word(mask, reach[base + word], word) {
             return false;
         }
-        blocked |= wanted & ~visible(mask, word);
     }
+    return mask.found;
+}
+
+// Whether the pool holds the bits of the lights `wanted` of word `word`,
+// with the node's enclosure flag settled where LMM1 will ask for it (the
+// node is blocked from one of them).
+fn serves_word(mask: NodeMask, wanted: u32, word: u32) -> bool {
+    if !mask.found || (valid(mask, word) & wanted) != wanted {
+        return false;
+    }
+    let blocked = wanted & ~visible(mask, word);
     return directory.header.point_to_node_tests != 0u || blocked == 0u || mask.settled;
 }
 
@@ -75,6 +79,25 @@ fn light_mesh_coverage(@builtin(global_invocation_id) id: vec3<u32>) {
             marked = cached_slot;
             let slot = u32(cached_slot);
             atomicOr(&flags[slot_flags + slot / 32u], 1u << (slot % 32u));
+        }
+    }
+    // The wide set's nodes, for the point's lamps (`light_mesh.wgsl`).
+    for (var word = 0u; word < light_words; word++) {
+        let lamps = reach[base + word] & lamp_bits(word);
+        if lamps == 0u {
+            continue;
+        }
+        var wide_nodes = walk(half_ball_at(point.position, point.geometric_normal, WIDE_STEPS));
+        while next_node(&wide_nodes) {
+            if !serves_word(node_mask(wide_nodes.node), lamps, word) {
+                atomicOr(&flags[index / 32u], 1u << (index % 32u));
+                return;
+            }
+            if cached_slot != marked {
+                marked = cached_slot;
+                let slot = u32(cached_slot);
+                atomicOr(&flags[slot_flags + slot / 32u], 1u << (slot % 32u));
+            }
         }
     }
 }

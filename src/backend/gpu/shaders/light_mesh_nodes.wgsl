@@ -44,6 +44,8 @@ struct HalfBall {
     p: vec3<f32>,
     n: vec3<f32>,
     h: f32,
+    // Mesh steps per step of its lattice: the walk gives mesh nodes.
+    steps: i32,
     low: vec3<i32>,
     span: vec3<i32>,
     radius_squared: f32,
@@ -52,11 +54,16 @@ struct HalfBall {
 
 // The mesh's own half-ball: radius kI·h.
 fn half_ball(p: vec3<f32>, n: vec3<f32>) -> HalfBall {
-    return half_ball_at(p, n, directory.header.h, directory.header.radius);
+    return half_ball_at(p, n, 1);
 }
 
-// The half-ball of `radius` on the lattice of step `h`.
-fn half_ball_at(p: vec3<f32>, n: vec3<f32>, h: f32, radius: f32) -> HalfBall {
+// The half-ball on the level of `steps` mesh steps (the mesh's origin,
+// step steps·h, radius steps·kI·h): the mesh's own for 1, the wide set's
+// for 2 (`lightmesh/wide.rs`). Scaling by a power of two is exact, so its
+// step and radius are the CPU's to the bit.
+fn half_ball_at(p: vec3<f32>, n: vec3<f32>, steps: i32) -> HalfBall {
+    let h = mul(directory.header.h, f32(steps));
+    let radius = mul(directory.header.radius, f32(steps));
     let origin = directory.header.origin;
     let local = lattice_local(p, h);
     let reach_steps = div(radius, h);
@@ -66,7 +73,32 @@ fn half_ball_at(p: vec3<f32>, n: vec3<f32>, h: f32, radius: f32) -> HalfBall {
     // `Lattice::on_plane_tolerance`: 8 epsilon times the magnitudes.
     let magnitude = (max_abs(p) + max_abs(origin)) + radius;
     let on_plane = mul(ON_PLANE_EPSILONS, magnitude);
-    return HalfBall(p, n, h, low, span, mul(radius, radius), on_plane);
+    return HalfBall(p, n, h, steps, low, span, mul(radius, radius), on_plane);
+}
+
+// `lightmesh/wide.rs`: a point also asks the half-ball of radius 2·kI·h on
+// the lattice of step 2h about the lamps its own set agrees on; where that
+// wide set disagrees on one, the lamp's share is sized by its blocker.
+const WIDE_STEPS: i32 = 2;
+
+// Whether `light` has a lamp to size a penumbra by (`wide::lamps`).
+fn is_lamp(light: Light) -> bool {
+    return light.directional == 0u && light.lamp_radius > 0.0;
+}
+
+// `wide::lamps`, word `word` (32 lights); none where penumbrae are fixed.
+fn lamp_bits(word: u32) -> u32 {
+    if directory.header.blocker_penumbra == 0u {
+        return 0u;
+    }
+    var bits = 0u;
+    for (var bit = 0u; bit < 32u; bit++) {
+        let index = word * 32u + bit;
+        if index < params.light_count && is_lamp(lights[index]) {
+            bits |= 1u << bit;
+        }
+    }
+    return bits;
 }
 
 // `Lattice::local`: `p` in steps `h` from the origin, fractional.
@@ -230,7 +262,7 @@ fn next_node(w: ptr<function, BallWalk>) -> bool {
         let distance_squared = (mul(dx, dx) + (*w).dy2) + (*w).dz2;
         if distance_squared <= ball.radius_squared
             && (mul(ball.n.x, dx) + (*w).n_yz.x) + (*w).n_yz.y > ball.on_plane {
-            (*w).node = ball.low + vec3<i32>(i, (*w).at.y, (*w).at.z);
+            (*w).node = (ball.low + vec3<i32>(i, (*w).at.y, (*w).at.z)) * ball.steps;
             (*w).distance_squared = distance_squared;
             return true;
         }

@@ -1,0 +1,315 @@
+//! Penumbrae wider than the mesh's half-ball.
+//!
+//! A point finds that it lies in a light's penumbra when the nodes of its
+//! half-ball disagree on the light; only then does `penumbra: blocker`
+//! size the penumbra by the blocker's distance. A lamp's penumbra can be
+//! wider than that half-ball's radius kI·h: a point deep inside it, or on
+//! its lit side further than kI·h from the hard shadow's edge, has nodes
+//! that all agree and kept a hard value. STUDY.md found that this was what
+//! kept the street (penumbrae wider than kI·h) and the grazing wall (the
+//! thin lit wedge beside a pilaster's shadow) above 0.6 of Whitted's error.
+//!
+//! So a point also asks a wider set: the half-ball of radius 2·kI·h on the
+//! lattice of step 2h (every other node of the mesh, about as many nodes
+//! as its own half-ball), keeping its nodes as LMM1 keeps a set's (an
+//! enclosed node blocked from an asked lamp leaves). Where that set
+//! disagrees on a lamp the mesh's half-ball agrees on, the lamp's share is
+//! sized by its blocker, as for a set that disagrees; the blocked node
+//! nearest the point comes from the wide set.
+//!
+//! Only lamps are asked (lights with a radius to size a penumbra by). The
+//! wide set's nodes are mesh nodes, demanded and filled with the
+//! half-ball's for those lamps, so every bit it reads is known and a cached
+//! frame finds what a cold one finds. A summary per tile of the wide
+//! lattice ([`Agreement`]) settles most points without walking the set.
+
+use glam::{IVec3, Vec3};
+
+use super::agreement::Agreement;
+use super::enclosure::blocks_some;
+use super::lattice::{Lattice, MAX_NODE_COORDINATE};
+use super::masks::BrickCache;
+use super::penumbra::Penumbra;
+use super::LightMesh;
+use crate::render::light::RenderLight;
+
+/// Mesh steps per step of the wide set's lattice.
+const STEPS: i32 = 2;
+// A wide node's mesh coordinates stay in range.
+const _: () = assert!(MAX_NODE_COORDINATE * (STEPS as f32) < i32::MAX as f32);
+
+/// The wide set's half-ball: its lattice (the mesh's origin, step 2h) and
+/// radius (2·kI·h).
+#[derive(Clone, Copy, Debug)]
+pub struct WideBall {
+    lattice: Lattice,
+    radius: f32,
+}
+
+impl WideBall {
+    pub fn of(mesh: &LightMesh) -> WideBall {
+        let lattice = Lattice {
+            origin: mesh.lattice.origin,
+            h: mesh.lattice.h * STEPS as f32,
+        };
+        WideBall {
+            lattice,
+            radius: mesh.ki * lattice.h,
+        }
+    }
+
+    /// Appends to `out` the mesh nodes of the wide half-ball of the point
+    /// at `p` with normal `n`. A wide node's position is its mesh node's to
+    /// the bit (2h·i and h·2i round alike: scaling by two is exact).
+    pub fn nodes(&self, p: Vec3, n: Vec3, out: &mut Vec<IVec3>) {
+        let first = out.len();
+        self.lattice.half_ball(p, n, self.radius, out);
+        for node in &mut out[first..] {
+            *node *= STEPS;
+        }
+    }
+}
+
+/// A bit per light that has a lamp to size a penumbra by (a point or spot
+/// light of positive radius), in `words` words.
+pub fn lamps(lights: &[RenderLight], words: usize) -> Vec<u64> {
+    let mut bits = vec![0; words];
+    for (index, light) in lights.iter().enumerate() {
+        if light.position().is_some() && light.lamp_radius > 0.0 {
+            bits[index / 64] |= 1 << (index % 64);
+        }
+    }
+    bits
+}
+
+/// One thread's working space for the wide sets of its points.
+pub struct WideScratch {
+    ball: WideBall,
+    /// The frame's lamps ([`lamps`]); none where penumbrae are fixed.
+    lamps: Vec<u64>,
+    agreement: Agreement,
+    /// The lamps a point's wide set was demanded for, and of those the
+    /// ones its own set agrees on, which it asks the wide set about.
+    demanded: Vec<u64>,
+    asked: Vec<u64>,
+    /// The wide set's kept nodes and, node after node, the asked lamps
+    /// each sees.
+    nodes: Vec<IVec3>,
+    visible: Vec<u64>,
+    all: Vec<u64>,
+    any: Vec<u64>,
+    /// The asked lamps the wide set disagrees on.
+    mixed: Vec<u64>,
+}
+
+impl WideScratch {
+    pub fn new(mesh: &LightMesh, lights: &[RenderLight]) -> WideScratch {
+        let words = mesh.masks().words();
+        let lamps = match mesh.penumbra {
+            Penumbra::Blocker => lamps(lights, words),
+            Penumbra::Fixed => vec![0; words],
+        };
+        WideScratch::with(WideBall::of(mesh), lamps)
+    }
+
+    /// Scratch for the wide sets of `ball`, asking about `lamps`.
+    fn with(ball: WideBall, lamps: Vec<u64>) -> WideScratch {
+        let words = lamps.len();
+        WideScratch {
+            ball,
+            lamps,
+            agreement: Agreement::new(ball.lattice, ball.radius, STEPS, words),
+            demanded: vec![0; words],
+            asked: vec![0; words],
+            nodes: Vec::new(),
+            visible: Vec::new(),
+            all: vec![0; words],
+            any: vec![0; words],
+            mixed: vec![0; words],
+        }
+    }
+
+    /// Finds the lamps of `reach` that the point's wide set disagrees on
+    /// while its own set agrees on them (every node sees the lamp: a bit
+    /// of `all`; none does: not a bit of `any`), for [`Self::mixed`].
+    pub fn look(
+        &mut self,
+        (p, n): (Vec3, Vec3),
+        reach: &[u64],
+        (all, any): (&[u64], &[u64]),
+        bricks: &mut BrickCache,
+    ) {
+        self.mixed.fill(0);
+        for word in 0..reach.len() {
+            self.demanded[word] = reach[word] & self.lamps[word];
+            self.asked[word] = self.demanded[word] & (all[word] | !any[word]);
+        }
+        if self.asked.iter().all(|&word| word == 0)
+            || (self.agreement).settle(p, &self.asked, bricks, &mut self.all)
+        {
+            return;
+        }
+        self.nodes.clear();
+        self.ball.nodes(p, n, &mut self.nodes);
+        // The enclosed nodes left out are those blocked from a lamp the
+        // wide set was demanded for (another light's bit may be unknown).
+        let demanded = &self.demanded;
+        self.nodes.retain(|&node| {
+            !(bricks.is_enclosed(node)
+                && bricks
+                    .mask(node)
+                    .is_some_and(|mask| blocks_some(&mask, demanded)))
+        });
+        self.visible.clear();
+        self.all.copy_from_slice(&self.asked);
+        self.any.fill(0);
+        for &node in &self.nodes {
+            let mask = bricks.mask(node);
+            for (word, &asked) in self.asked.iter().enumerate() {
+                let seen = mask.map_or(0, |m| m.visible(word)) & asked;
+                self.visible.push(seen);
+                self.all[word] &= seen;
+                self.any[word] |= seen;
+            }
+        }
+        for word in 0..reach.len() {
+            self.mixed[word] = self.any[word] & !self.all[word];
+        }
+    }
+
+    /// Word `word` of the lamps the last point [`Self::look`]ed at found
+    /// its wide set disagreeing on.
+    pub fn mixed(&self, word: usize) -> u64 {
+        self.mixed[word]
+    }
+
+    /// The wide set's nodes of the last point [`Self::look`] walked, each with whether it sees light number `light`.
+    pub fn seen_from(&self, light: usize) -> impl Iterator<Item = (IVec3, bool)> + '_ {
+        let words = self.asked.len();
+        let (word, bit) = (light / 64, light % 64);
+        let sees =
+            (self.visible.iter().skip(word).step_by(words)).map(move |&seen| seen >> bit & 1 == 1);
+        self.nodes.iter().copied().zip(sees)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lightmesh::masks::MaskStore;
+    use crate::render::light::LightSource;
+
+    const H: f32 = 0.1;
+
+    fn ball() -> WideBall {
+        let mesh = Lattice::new(H);
+        WideBall {
+            lattice: Lattice {
+                origin: mesh.origin,
+                h: 2.0 * H,
+            },
+            radius: 2.5 * 2.0 * H,
+        }
+    }
+
+    #[test]
+    fn wide_nodes_are_mesh_nodes_where_the_wide_lattice_puts_them() {
+        let wide = ball();
+        let mesh = Lattice::new(H);
+        let mut nodes = vec![IVec3::MAX];
+        let p = Vec3::new(0.31, -0.07, 1e3);
+        wide.nodes(p, Vec3::new(0.2, 1.0, -0.3).normalize(), &mut nodes);
+        assert_eq!(nodes[0], IVec3::MAX, "appended after what was there");
+        let mut own = Vec::new();
+        wide.lattice.half_ball(
+            p,
+            Vec3::new(0.2, 1.0, -0.3).normalize(),
+            wide.radius,
+            &mut own,
+        );
+        assert_eq!(nodes.len(), own.len() + 1);
+        assert!(own.len() > 20, "{} nodes", own.len());
+        for (&node, &level_node) in nodes[1..].iter().zip(&own) {
+            assert_eq!(node, level_node * 2);
+            let (at_mesh, at_level) = (
+                mesh.node_position(node),
+                wide.lattice.node_position(level_node),
+            );
+            assert_eq!(
+                at_mesh.to_array().map(f32::to_bits),
+                at_level.to_array().map(f32::to_bits)
+            );
+        }
+    }
+
+    #[test]
+    fn only_reaching_lamps_count_and_directional_lights_are_no_lamps() {
+        let light = |source, lamp_radius| RenderLight {
+            source,
+            power: Vec3::ONE,
+            range: None,
+            lamp_radius,
+        };
+        let point = LightSource::Point {
+            position: Vec3::ZERO,
+        };
+        let sun = LightSource::Directional { towards: Vec3::Y };
+        let mut lights = vec![light(point, 0.0); 70];
+        lights[3] = light(point, 0.2);
+        lights[5] = light(sun, 0.2);
+        lights[66] = light(point, 0.1);
+        assert_eq!(lamps(&lights, 2), vec![1 << 3, 1 << 2]);
+    }
+
+    /// Light 0, a lamp, is seen by the mesh's nodes at x ≥ 3 steps; light
+    /// 1, no lamp, by the same; light 2, a lamp, by every node.
+    fn store() -> MaskStore {
+        let mut store = MaskStore::new(3);
+        for z in -16..=16 {
+            for y in -16..=16 {
+                for x in -16..=16 {
+                    let node = IVec3::new(x, y, z);
+                    store.set(node, 0, x >= 3, Some(false));
+                    store.set(node, 1, x >= 3, Some(false));
+                    store.set(node, 2, true, Some(false));
+                }
+            }
+        }
+        store
+    }
+
+    #[test]
+    fn a_lamp_edge_beyond_the_half_ball_but_within_the_wide_set_is_found() {
+        let store = store();
+        let mut bricks = BrickCache::new(&store);
+        let mut wide = WideScratch::with(ball(), vec![0b101]);
+        let reach = [0b111];
+        let mesh = Lattice::new(H);
+        let up = Vec3::Y;
+        let mixed_at = |wide: &mut WideScratch, bricks: &mut BrickCache, x: f32, (all, any)| {
+            let p = mesh.origin + Vec3::new(x, 0.3, 0.2) * H;
+            wide.look((p, up), &reach, (&[all], &[any]), bricks);
+            wide.mixed(0)
+        };
+        // 3.5 steps before the edge, the mesh's half-ball (2.5 steps) sees
+        // no node of the lamp's and agrees; the wide one (5 steps) does.
+        // Light 1 is no lamp and light 2 is seen by all: never mixed.
+        assert_eq!(
+            mixed_at(&mut wide, &mut bricks, -0.5, (0b100, 0b110)),
+            0b001
+        );
+        assert!(wide.seen_from(0).any(|(_, sees)| sees));
+        assert!(wide.seen_from(0).any(|(_, sees)| !sees));
+        assert!(wide.seen_from(0).all(|(node, _)| node % 2 == IVec3::ZERO));
+        // Where the point's own set disagrees on the lamp, it is not asked.
+        assert_eq!(mixed_at(&mut wide, &mut bricks, 1.5, (0b100, 0b111)), 0);
+        // Further than the wide radius from the edge: nothing.
+        assert_eq!(mixed_at(&mut wide, &mut bricks, -6.5, (0b100, 0b110)), 0);
+        // Beyond the edge the lit side agrees too, and the wide set sees
+        // back over it.
+        assert_eq!(mixed_at(&mut wide, &mut bricks, 6.0, (0b111, 0b111)), 0b001);
+        // No lamps, nothing asked (penumbrae of fixed width).
+        let mut fixed = WideScratch::with(ball(), vec![0]);
+        assert_eq!(mixed_at(&mut fixed, &mut bricks, -0.5, (0b100, 0b110)), 0);
+    }
+}
