@@ -26,15 +26,16 @@ const SCENES: [&str; 6] = [
     "study-wall",
 ];
 
-/// The methods and variants hashed: every CPU method, and LMM1 under both
-/// ways of sizing a penumbra.
-const VARIANTS: [(&str, Method, Penumbra); 6] = [
-    ("auto", Method::Auto, Penumbra::Blocker),
-    ("whitted", Method::Whitted, Penumbra::Blocker),
-    ("lmm", Method::Lmm, Penumbra::Blocker),
-    ("lmm1", Method::Lmm1, Penumbra::Blocker),
+/// The methods and variants hashed: every CPU method with the default
+/// penumbra, and LMM1 under each other way of sizing one.
+const VARIANTS: [(&str, Method, Penumbra); 7] = [
+    ("auto", Method::Auto, Penumbra::Wide),
+    ("whitted", Method::Whitted, Penumbra::Wide),
+    ("lmm", Method::Lmm, Penumbra::Wide),
+    ("lmm1", Method::Lmm1, Penumbra::Wide),
+    ("lmm1-blocker", Method::Lmm1, Penumbra::Blocker),
     ("lmm1-fixed", Method::Lmm1, Penumbra::Fixed),
-    ("area", Method::Area, Penumbra::Blocker),
+    ("area", Method::Area, Penumbra::Wide),
 ];
 
 fn animations() -> PathBuf {

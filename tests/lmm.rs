@@ -416,18 +416,17 @@ fn more_than_a_hundred_lights_use_several_mask_words() {
 
 /// The many-light floor with lamps of 5 cm, whose penumbrae `blocker`
 /// sizes: where a point's set disagrees on a lamp, its nearest blocked
-/// node is sought and its level's nodes traced, for every such lamp, and
-/// each point also walks its wide set (`lightmesh/wide.rs`). With 34
-/// lamps the GPU's frame is the CPU's on every adapter (lavapipe cut 24
-/// points short at 40, which passed before the wide set). With 130
+/// node is sought and its level's nodes traced, for every such lamp.
+/// With 40 lamps the GPU's frame is the CPU's on every adapter. With 130
 /// a point can need more loop iterations than lavapipe (Mesa 22.3) runs
 /// in one invocation: it ends every loop after 65,535 of them, silently,
 /// and its frame lost lamps the CPU's kept. The shader notices and the
 /// frame is refused with an error that says so; a hardware adapter has
-/// no such budget and must match.
+/// no such budget and must match. (`wide`, which also walks each point's
+/// wide set, passes lavapipe's budget here up to 34 lamps.)
 #[test]
 fn many_lamps_sized_by_their_blockers_give_the_cpus_frame_on_the_gpu() {
-    for lamps in [34, 130] {
+    for lamps in [40, 130] {
         let mut scene = lit_floor();
         let m = add_material(&mut scene, lambert(Vec3::splat(0.5)));
         add_quads(&mut scene, &[floor_quad(0.5, 0.3)], 1, m);
@@ -456,7 +455,7 @@ fn many_lamps_sized_by_their_blockers_give_the_cpus_frame_on_the_gpu() {
             }
             Ok(on_gpu) => assert!(on_gpu.pixels.iter().all(|p| p.is_finite())),
             Err(error) => {
-                assert!(lamps > 34 && software, "{lamps} lamps: {error}");
+                assert!(lamps > 40 && software, "{lamps} lamps: {error}");
                 assert!(
                     error
                         .to_string()

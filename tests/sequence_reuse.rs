@@ -153,13 +153,15 @@ fn cpu() -> Backend {
 
 /// The light-mesh runs reuse is checked for: both methods with the
 /// paper's kernel, LMM1 with the smooth one, and LMM1 with each light's
-/// set sized by its blocker's distance.
+/// set sized by its blocker's distance, with and without the wide set
+/// (whose nodes are filled with the mesh's and reused like them).
 type Variant = (Method, Kernel, Penumbra);
-const VARIANTS: [Variant; 4] = [
+const VARIANTS: [Variant; 5] = [
     (Method::Lmm1, Kernel::Box, Penumbra::Fixed),
     (Method::Lmm, Kernel::Box, Penumbra::Fixed),
     (Method::Lmm1, Kernel::Smooth, Penumbra::Fixed),
     (Method::Lmm1, Kernel::Smooth, Penumbra::Blocker),
+    (Method::Lmm1, Kernel::Box, Penumbra::Wide),
 ];
 
 fn settings_for_variant((method, kernel, penumbra): Variant) -> Settings {
@@ -194,7 +196,7 @@ fn frames_with_reused_masks_equal_frames_rendered_cold() {
     let scene = street(true, true, true);
     let runs = sequences_equal_cold(&scene, &mut cpu());
     for ((_, _, penumbra), frames) in VARIANTS.into_iter().zip(runs) {
-        if penumbra == Penumbra::Blocker {
+        if penumbra.sizes_by_blocker() {
             let rays = |(_, stats): &(Image, FrameStats)| stats.lightmesh.unwrap().blocker_rays;
             assert!(
                 frames.iter().all(|frame| rays(frame) > 0),

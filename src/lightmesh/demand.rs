@@ -9,7 +9,6 @@ use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
 use super::masks::{parity, split, BRICK_NODES};
-use super::penumbra::Penumbra;
 use super::wide::{self, WideBall};
 use super::{LightMesh, LightMeshError};
 use crate::render::omega::{LightLanes, PointLanes, LANES};
@@ -107,9 +106,8 @@ impl BrickTables {
 
 impl LightMesh {
     /// What `points` need: reaching lights per point and needed bits per
-    /// node, in bricks: each point's half-ball for its lights and, where
-    /// penumbrae are sized by their blocker, its wide set for its lamps
-    /// (`super::wide`). The tables grow with the number of distinct bricks
+    /// node, in bricks: each point's half-ball for its lights and, with
+    /// `penumbra: wide`, its wide set for its lamps (`super::wide`). The tables grow with the number of distinct bricks
     /// the points touch, so their size is checked against the memory limit
     /// as they grow: a lattice far too fine for the view is refused here,
     /// before it can exhaust memory.
@@ -128,7 +126,7 @@ impl LightMesh {
         let table_bytes = BRICK_NODES * words * std::mem::size_of::<u64>();
         let brick_limit = self.memory_limit / table_bytes;
         let too_large = |bricks: usize| self.too_large(bricks.saturating_mul(table_bytes));
-        let wide = (self.penumbra == Penumbra::Blocker)
+        let wide = (self.penumbra.asks_wide_set())
             .then(|| (WideBall::of(self), wide::lamps(lights.lights(), words)));
         let tables = points
             .par_chunks(CHUNK)

@@ -16,7 +16,7 @@ use super::enclosure::blocks_some;
 use super::kernel::{Kernel, Weights};
 use super::lamp_disk;
 use super::masks::BrickCache;
-use super::penumbra::{self, LevelScratch, Penumbra};
+use super::penumbra::{self, LevelScratch};
 use super::wide::WideScratch;
 use super::{LightMesh, LightMeshStats};
 use crate::accel::offset::offset_ray_origin;
@@ -81,7 +81,7 @@ pub struct Scratch<'a> {
     levels: LevelScratch,
     /// What the nodes around each tile agree on (LMM1).
     agreement: Agreement,
-    /// The points' wide sets (`penumbra: blocker`).
+    /// The points' wide sets (`penumbra: wide`).
     wide: WideScratch,
     bricks: BrickCache<'a>,
 }
@@ -228,13 +228,15 @@ impl LightMesh {
                     let bit = first + lane;
                     let light = word * 64 + bit;
                     let seen_by_all = all[word] >> bit & 1 == 1;
+                    let in_wide_set = wide.mixed(word) >> bit & 1 == 1;
                     let penumbra_at = PenumbraAt {
                         point,
                         lights: lights.lights(),
                         light,
                         world,
+                        wide: in_wide_set,
                     };
-                    let share = if wide.mixed(word) >> bit & 1 == 1 {
+                    let share = if in_wide_set {
                         // The point's own nodes agree: their answer stands
                         // where nothing sizes the penumbra.
                         let set = wide.seen_from(light).map(|(node, sees)| SetNode {
@@ -264,8 +266,8 @@ impl LightMesh {
                                 .sum();
                             Share::Part(seen as f32 / total as f32)
                         };
-                        let by_blocker = match self.penumbra {
-                            Penumbra::Blocker => {
+                        let by_blocker = match self.penumbra.sizes_by_blocker() {
+                            true => {
                                 let set = nodes.iter().zip(sees()).map(|(&node, sees)| SetNode {
                                     node,
                                     distance_squared: self
@@ -275,7 +277,7 @@ impl LightMesh {
                                 });
                                 self.blocker_share(penumbra_at, set, levels, bricks, &mut counts)
                             }
-                            Penumbra::Fixed => None,
+                            false => None,
                         };
                         by_blocker.unwrap_or_else(fixed)
                     };
@@ -399,6 +401,7 @@ impl LightMesh {
             lights,
             light: index,
             world,
+            ..
         } = at;
         let light = &lights[index];
         // Ties (a lattice has many nodes at one distance) go to the least
@@ -417,7 +420,14 @@ impl LightMesh {
             true => Share::Full,
             false => Share::Hidden,
         };
-        let Some(level) = penumbra::level(self.lattice, self.ki, estimate.radius?) else {
+        let level = penumbra::level(self.lattice, self.ki, estimate.radius?);
+        // From the wide set, only a penumbra wider than the mesh's level
+        // is sized: a narrower one the point's own nodes, which agree,
+        // would have seen, so their answer stands.
+        if at.wide && level.is_none_or(|level| level.h <= self.lattice.h) {
+            return None;
+        }
+        let Some(level) = level else {
             return Some(hard);
         };
         let radius = self.ki * level.h;
@@ -486,13 +496,15 @@ fn known_sight(bricks: &mut BrickCache, node: IVec3, light: usize) -> Option<boo
 }
 
 /// Where a penumbra is sized: the point, the frame's lights and the
-/// number of the one sized, the world.
+/// number of the one sized, the world; and whether the set is the
+/// point's wide set (`super::wide`).
 #[derive(Clone, Copy)]
 struct PenumbraAt<'a> {
     point: &'a ShadingPoint,
     lights: &'a [RenderLight],
     light: usize,
     world: &'a World,
+    wide: bool,
 }
 
 /// A node of a point's interpolation set, seen from one light.

@@ -114,9 +114,10 @@ pub struct LightMeshStats {
     pub points_settled: u64,
     /// Points shaded by formula (1) because their set was empty.
     pub fallback_points: u64,
-    /// Rays of `lightmesh.penumbra: blocker`, per point and light its
-    /// nodes disagree on: one or two closest-hit rays to find the blocker,
-    /// and one segment per node of the lattice level's lamp disk.
+    /// Rays of `lightmesh.penumbra: blocker` and `wide`, per point and
+    /// light its nodes (or with `wide` its wide set) disagree on: one or
+    /// two closest-hit rays to find the blocker, and one segment per node
+    /// of the lattice level's lamp disk.
     pub blocker_rays: u64,
     /// Level segments of `blocker` the CPU backend answered without a
     /// ray: from the mesh's masks, or as a neighbouring point of the same

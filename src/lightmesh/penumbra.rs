@@ -33,8 +33,10 @@
 //! the lamp gives there.
 //!
 //! Points whose nodes all agree on a light (far from any shadow edge, most
-//! points) trace nothing and keep their value. Nothing here is kept from
-//! frame to frame, so reuse of the masks stays exact.
+//! points) trace nothing and keep their value; with `penumbra: wide`,
+//! those whose wide set disagrees on a lamp are sized too (`super::wide`).
+//! Nothing here is kept from frame to frame, so reuse of the masks stays
+//! exact.
 
 use glam::{IVec3, Vec3};
 use std::hash::BuildHasher;
@@ -55,10 +57,28 @@ pub enum Penumbra {
     /// The paper's: one radius kI·h for every light and point.
     Fixed,
     /// Each lamp's radius from the distance to its blocker, where the
-    /// nodes disagree on it (closer to a real lamp on every scene of
-    /// STUDY.md); lights without a lamp radius keep kI·h.
-    #[default]
+    /// point's nodes disagree on it (closer to a real lamp than `fixed` on
+    /// every scene of STUDY.md); lights without a lamp radius keep kI·h.
     Blocker,
+    /// As `blocker`, and also where the point's wide set (the half-ball
+    /// of twice the radius on every other node, `super::wide`) disagrees
+    /// on a lamp its own nodes agree on, so a penumbra wider than kI·h
+    /// reaches every point in it: the closest to a real lamp on every
+    /// scene of STUDY.md, at the cost BENCHMARKS.md measures.
+    #[default]
+    Wide,
+}
+
+impl Penumbra {
+    /// Whether lamps' penumbrae are sized by their blockers.
+    pub fn sizes_by_blocker(self) -> bool {
+        self != Penumbra::Fixed
+    }
+
+    /// Whether points also ask their wide set.
+    pub fn asks_wide_set(self) -> bool {
+        self == Penumbra::Wide
+    }
 }
 
 /// The finest and the coarsest level a penumbra's set is taken from, as
@@ -163,7 +183,7 @@ pub struct LevelScratch {
 /// is made per thread and frame: nothing is kept between frames.
 #[derive(Default)]
 pub struct LevelAnswers {
-    /// Allocated on the first question: only `penumbra: blocker` asks.
+    /// Allocated on the first question: only `blocker` and `wide` ask.
     slots: Vec<Option<(Segment, bool)>>,
 }
 

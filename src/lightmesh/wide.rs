@@ -2,7 +2,8 @@
 //!
 //! A point finds that it lies in a light's penumbra when the nodes of its
 //! half-ball disagree on the light; only then does `penumbra: blocker`
-//! size the penumbra by the blocker's distance. A lamp's penumbra can be
+//! size the penumbra by the blocker's distance. `penumbra: wide` (the
+//! default) looks further. A lamp's penumbra can be
 //! wider than that half-ball's radius kI·h: a point deep inside it, or on
 //! its lit side further than kI·h from the hard shadow's edge, has nodes
 //! that all agree and kept a hard value. STUDY.md found that this was what
@@ -29,7 +30,6 @@ use super::agreement::Agreement;
 use super::enclosure::blocks_some;
 use super::lattice::{Lattice, MAX_NODE_COORDINATE};
 use super::masks::BrickCache;
-use super::penumbra::Penumbra;
 use super::LightMesh;
 use crate::render::light::RenderLight;
 
@@ -85,7 +85,8 @@ pub fn lamps(lights: &[RenderLight], words: usize) -> Vec<u64> {
 /// One thread's working space for the wide sets of its points.
 pub struct WideScratch {
     ball: WideBall,
-    /// The frame's lamps ([`lamps`]); none where penumbrae are fixed.
+    /// The frame's lamps ([`lamps`]); none unless points ask their wide
+    /// set (`penumbra: wide`).
     lamps: Vec<u64>,
     agreement: Agreement,
     /// The lamps a point's wide set was demanded for, and of those the
@@ -105,9 +106,9 @@ pub struct WideScratch {
 impl WideScratch {
     pub fn new(mesh: &LightMesh, lights: &[RenderLight]) -> WideScratch {
         let words = mesh.masks().words();
-        let lamps = match mesh.penumbra {
-            Penumbra::Blocker => lamps(lights, words),
-            Penumbra::Fixed => vec![0; words],
+        let lamps = match mesh.penumbra.asks_wide_set() {
+            true => lamps(lights, words),
+            false => vec![0; words],
         };
         WideScratch::with(WideBall::of(mesh), lamps)
     }

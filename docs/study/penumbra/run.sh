@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
 # The penumbra study (STUDY.md, "Penumbra width from the blocker"): the box
 # at three lamp radii and the other three study scenes, each with kernel
-# box/smooth and penumbra fixed/blocker, Whitted and the LMM1 sweep, all
+# box/smooth and penumbra fixed/blocker/wide, Whitted and the LMM1 sweep, all
 # variants of a scene against one area reference. Run from the repository
 # root after `cargo build --release`; writes under ./study-penumbra.
 set -euo pipefail
 lmanim=$(realpath target/release/lmanim)
 animations=$(realpath animations)
 mkdir -p study-penumbra && cd study-penumbra
-variants="box:fixed smooth:fixed box:blocker smooth:blocker"
+variants="box:fixed smooth:fixed box:blocker smooth:blocker box:wide smooth:wide"
 study() { # name, scene, the settings' lamps line (or nothing)
   local name=$1 scene=$2 lamps=$3 reference=""
   for variant in $variants; do

@@ -61,8 +61,8 @@ pub struct MeshHeader {
     pub inverse_radius_squared: f32,
     /// 0 for the box kernel, 1 for the smooth one.
     pub smooth_kernel: u32,
-    /// 1 where each light's set is sized by its blocker's distance
-    /// (`lightmesh.penumbra: blocker`), 0 for the fixed radius.
+    /// How lamps' sets are sized (`lightmesh.penumbra`): 0 for the fixed
+    /// radius, 1 by the blocker's distance, 2 by it and the wide set.
     pub blocker_penumbra: u32,
     /// WGSL rounds the struct up to its vec3's alignment of 16 bytes.
     pub padding: u32,
@@ -351,7 +351,11 @@ impl MaskPool {
             point_to_node_tests: point_to_node_tests as u32,
             inverse_radius_squared: weights.inverse_radius_squared(),
             smooth_kernel: (weights.kernel() == Kernel::Smooth) as u32,
-            blocker_penumbra: (mesh.penumbra == Penumbra::Blocker) as u32,
+            blocker_penumbra: match mesh.penumbra {
+                Penumbra::Fixed => 0,
+                Penumbra::Blocker => 1,
+                Penumbra::Wide => 2,
+            },
             padding: 0,
         };
         if !self.directory_stale && self.directory.as_ref().is_some_and(|(h, _)| *h == header) {

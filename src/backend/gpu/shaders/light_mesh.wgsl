@@ -369,7 +369,9 @@ fn find_nearest_blocked(ball: HalfBall, wide: bool, reach_base: u32, word: u32, 
 // word) over the lamp disk of the lattice level its penumbra wants at the
 // point, found from the blocker of the centre ray or of the set's nearest
 // blocked node (`find_nearest_blocked`), each level node's segment traced.
-fn blocker_share(point: ShadePoint, origin: vec3<f32>, bit: u32, light: Light) -> BlockerShare {
+// From the `wide` set only a penumbra wider than the mesh's level is
+// sized: a narrower one gets SHARE_FIXED, the point's own agreed answer.
+fn blocker_share(point: ShadePoint, origin: vec3<f32>, bit: u32, light: Light, wide: bool) -> BlockerShare {
     if !is_lamp(light) {
         return BlockerShare(SHARE_FIXED, 0.0, 0u);
     }
@@ -389,7 +391,7 @@ fn blocker_share(point: ShadePoint, origin: vec3<f32>, bit: u32, light: Light) -
     // `penumbra::level`.
     let steps = div(radius, directory.header.radius);
     if !(steps >= mul(SQRT_2, ldexp(1.0, FINEST_LEVEL - 1))) {
-        return BlockerShare(hard, 0.0, rays);
+        return BlockerShare(select(hard, SHARE_FIXED, wide), 0.0, rays);
     }
     var level = COARSEST_LEVEL;
     for (var k = FINEST_LEVEL; k < COARSEST_LEVEL; k++) {
@@ -397,6 +399,9 @@ fn blocker_share(point: ShadePoint, origin: vec3<f32>, bit: u32, light: Light) -
             level = k;
             break;
         }
+    }
+    if wide && level <= 0 {
+        return BlockerShare(SHARE_FIXED, 0.0, rays);
     }
     let h = mul(directory.header.h, ldexp(1.0, level));
     let level_radius = mul(directory.header.radius, ldexp(1.0, level));
@@ -496,7 +501,8 @@ fn shade(index: u32) {
         // nearest blocked node of those and of the lamps the set disagrees
         // on.
         let lamps = reach[reach_base + word] & lamp_bits(word);
-        let wide = wide_disagreements(wide_ball, reach_base, word, lamps & (t.all | ~t.any));
+        let agreed = select(0u, lamps & (t.all | ~t.any), asks_wide_set());
+        let wide = wide_disagreements(wide_ball, reach_base, word, agreed);
         nearest_found = 0u;
         find_nearest_blocked(ball, false, reach_base, word, lamps & t.any & ~t.all);
         find_nearest_blocked(wide_ball, true, reach_base, word, wide);
@@ -512,7 +518,7 @@ fn shade(index: u32) {
             var term = value;
             if (wide >> bit & 1u) != 0u {
                 // Where nothing sizes the penumbra the set's answer stands.
-                let share = blocker_share(point, origin, bit, light);
+                let share = blocker_share(point, origin, bit, light, true);
                 blocker_rays += share.rays;
                 let agreed_hidden = share.kind == SHARE_FIXED && (t.all >> bit & 1u) == 0u;
                 if share.kind == SHARE_HIDDEN || agreed_hidden {
@@ -525,7 +531,7 @@ fn shade(index: u32) {
                 // The nodes disagree on this light.
                 var share = BlockerShare(SHARE_FIXED, 0.0, 0u);
                 if directory.header.blocker_penumbra != 0u {
-                    share = blocker_share(point, origin, bit, light);
+                    share = blocker_share(point, origin, bit, light, false);
                     blocker_rays += share.rays;
                 }
                 if share.kind == SHARE_HIDDEN {

@@ -82,7 +82,7 @@ fn light_mesh_coverage(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     // The wide set's nodes, for the point's lamps (`light_mesh.wgsl`).
-    for (var word = 0u; word < light_words; word++) {
+    for (var word = 0u; word < light_words && asks_wide_set(); word++) {
         let lamps = reach[base + word] & lamp_bits(word);
         if lamps == 0u {
             continue;

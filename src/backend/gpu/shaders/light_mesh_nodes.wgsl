@@ -15,7 +15,9 @@ struct MeshHeader {
     // The kernel's 1/r² (`kernel::Weights`), and 1 for the smooth kernel.
     inverse_radius_squared: f32,
     smooth_kernel: u32,
-    // 1 where sets are sized by the blocker (`lightmesh/penumbra.rs`).
+    // 0 for the fixed radius, 1 where sets are sized by the blocker
+    // (`lightmesh/penumbra.rs`), WIDE_PENUMBRA where the wide set is
+    // also asked.
     blocker_penumbra: u32,
 }
 
@@ -80,6 +82,11 @@ fn half_ball_at(p: vec3<f32>, n: vec3<f32>, steps: i32) -> HalfBall {
 // the lattice of step 2h about the lamps its own set agrees on; where that
 // wide set disagrees on one, the lamp's share is sized by its blocker.
 const WIDE_STEPS: i32 = 2;
+const WIDE_PENUMBRA: u32 = 2u;
+
+fn asks_wide_set() -> bool {
+    return directory.header.blocker_penumbra == WIDE_PENUMBRA;
+}
 
 // Whether `light` has a lamp to size a penumbra by (`wide::lamps`).
 fn is_lamp(light: Light) -> bool {
