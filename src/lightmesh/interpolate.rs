@@ -239,15 +239,11 @@ impl LightMesh {
                     let share = if in_wide_set {
                         // The point's own nodes agree: their answer stands
                         // where nothing sizes the penumbra.
-                        let set = wide.seen_from(light).map(|(node, sees)| SetNode {
-                            node,
-                            distance_squared: self.lattice.distance_squared(node, point.position),
-                            sees,
-                        });
                         let agreed = match seen_by_all {
                             true => Share::Full,
                             false => Share::Hidden,
                         };
+                        let set = wide.seen_from(light);
                         self.blocker_share(penumbra_at, set, levels, bricks, &mut counts)
                             .unwrap_or(agreed)
                     } else if seen_by_all {
@@ -268,13 +264,7 @@ impl LightMesh {
                         };
                         let by_blocker = match self.penumbra.sizes_by_blocker() {
                             true => {
-                                let set = nodes.iter().zip(sees()).map(|(&node, sees)| SetNode {
-                                    node,
-                                    distance_squared: self
-                                        .lattice
-                                        .distance_squared(node, point.position),
-                                    sees,
-                                });
+                                let set = nodes.iter().copied().zip(sees());
                                 self.blocker_share(penumbra_at, set, levels, bricks, &mut counts)
                             }
                             false => None,
@@ -384,14 +374,15 @@ impl LightMesh {
     /// mesh's mask where the level is no finer than the mesh (its nodes
     /// are the mesh's) and the bit is known, else remembered from a
     /// neighbouring point (`levels`), else traced.
-    /// `set` is the point's interpolation set seen from the light. The
+    /// `set` is the point's interpolation set (or its wide set), each node
+    /// with whether it sees the light. The
     /// share is None where nothing sizes the penumbra (a light without a
     /// lamp, or a blocked node whose segment is found clear): the
     /// half-ball's share stands there.
     fn blocker_share(
         &self,
         at: PenumbraAt,
-        set: impl Iterator<Item = SetNode>,
+        set: impl Iterator<Item = (IVec3, bool)>,
         levels: &mut LevelScratch,
         bricks: &mut BrickCache,
         counts: &mut PointCounts,
@@ -406,13 +397,14 @@ impl LightMesh {
         let light = &lights[index];
         // Ties (a lattice has many nodes at one distance) go to the least
         // coordinates, so the choice does not depend on the set's order.
+        // Distances rounded as the half-ball rounds them.
         let nearest_blocked = set
-            .filter(|node| !node.sees)
-            .min_by(|a, b| {
-                (a.distance_squared.total_cmp(&b.distance_squared))
-                    .then_with(|| a.node.to_array().cmp(&b.node.to_array()))
+            .filter(|&(_, sees)| !sees)
+            .map(|(node, _)| (self.lattice.distance_squared(node, point.position), node))
+            .min_by(|(a, a_node), (b, b_node)| {
+                (a.total_cmp(b)).then_with(|| a_node.to_array().cmp(&b_node.to_array()))
             })
-            .map_or(point.position, |node| self.lattice.node_position(node.node));
+            .map_or(point.position, |(_, node)| self.lattice.node_position(node));
         let origin = offset_ray_origin(point.position, point.geometric_normal);
         let estimate = penumbra::estimate(origin, light, nearest_blocked, world)?;
         counts.blocker_rays += estimate.rays;
@@ -505,16 +497,6 @@ struct PenumbraAt<'a> {
     light: usize,
     world: &'a World,
     wide: bool,
-}
-
-/// A node of a point's interpolation set, seen from one light.
-#[derive(Clone, Copy)]
-struct SetNode {
-    node: IVec3,
-    /// Its squared distance to the point, rounded as the half-ball does.
-    distance_squared: f32,
-    /// Whether it sees the light.
-    sees: bool,
 }
 
 /// What formula (2) gives a light at a point whose set disagrees on it.

@@ -67,19 +67,14 @@ fn light_mesh_coverage(@builtin(global_invocation_id) id: vec3<u32>) {
     if any_light == 0u {
         return;
     }
-    let slot_flags = (params.item_count + 31u) / 32u;
     var marked = -1;
     var nodes = walk(half_ball(point.position, point.geometric_normal));
     while next_node(&nodes) {
         if !serves(node_mask(nodes.node), base, light_words) {
-            atomicOr(&flags[index / 32u], 1u << (index % 32u));
+            mark_unserved(index);
             return;
         }
-        if cached_slot != marked {
-            marked = cached_slot;
-            let slot = u32(cached_slot);
-            atomicOr(&flags[slot_flags + slot / 32u], 1u << (slot % 32u));
-        }
+        mark_read_slot(&marked);
     }
     // The wide set's nodes, for the point's lamps (`light_mesh.wgsl`).
     for (var word = 0u; word < light_words && asks_wide_set(); word++) {
@@ -90,14 +85,27 @@ fn light_mesh_coverage(@builtin(global_invocation_id) id: vec3<u32>) {
         var wide_nodes = walk(half_ball_at(point.position, point.geometric_normal, WIDE_STEPS));
         while next_node(&wide_nodes) {
             if !serves_word(node_mask(wide_nodes.node), lamps, word) {
-                atomicOr(&flags[index / 32u], 1u << (index % 32u));
+                mark_unserved(index);
                 return;
             }
-            if cached_slot != marked {
-                marked = cached_slot;
-                let slot = u32(cached_slot);
-                atomicOr(&flags[slot_flags + slot / 32u], 1u << (slot % 32u));
-            }
+            mark_read_slot(&marked);
         }
     }
+}
+
+// Flags point `index` as one the pool does not serve yet.
+fn mark_unserved(index: u32) {
+    atomicOr(&flags[index / 32u], 1u << (index % 32u));
+}
+
+// Flags the pool slot the last `node_mask` read as read by a point, once
+// per run of reads from one slot (the last one flagged is `marked`).
+fn mark_read_slot(marked: ptr<function, i32>) {
+    if cached_slot == *marked {
+        return;
+    }
+    *marked = cached_slot;
+    let slot = u32(cached_slot);
+    let slot_flags = (params.item_count + 31u) / 32u;
+    atomicOr(&flags[slot_flags + slot / 32u], 1u << (slot % 32u));
 }
