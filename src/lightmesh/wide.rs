@@ -3,20 +3,21 @@
 //! A point finds that it lies in a light's penumbra when the nodes of its
 //! half-ball disagree on the light; only then does `penumbra: blocker`
 //! size the penumbra by the blocker's distance. `penumbra: wide` (the
-//! default) looks further. A lamp's penumbra can be
-//! wider than that half-ball's radius kI·h: a point deep inside it, or on
-//! its lit side further than kI·h from the hard shadow's edge, has nodes
-//! that all agree and kept a hard value. STUDY.md found that this was what
-//! kept the street (penumbrae wider than kI·h) and the grazing wall (the
-//! thin lit wedge beside a pilaster's shadow) above 0.6 of Whitted's error.
+//! default) looks further. A lamp's penumbra can be wider than that
+//! half-ball's radius kI·h: a point deep inside it, or on its lit side
+//! further than kI·h from the hard shadow's edge, has nodes that all agree
+//! and kept a hard value. STUDY.md found that this was what kept the
+//! street (penumbrae wider than kI·h) above 0.6 of Whitted's error.
 //!
 //! So a point also asks a wider set: the half-ball of radius 2·kI·h on the
 //! lattice of step 2h (every other node of the mesh, about as many nodes
 //! as its own half-ball), keeping its nodes as LMM1 keeps a set's (an
 //! enclosed node blocked from an asked lamp leaves). Where that set
-//! disagrees on a lamp the mesh's half-ball agrees on, the lamp's share is
-//! sized by its blocker, as for a set that disagrees; the blocked node
-//! nearest the point comes from the wide set.
+//! disagrees on a lamp the mesh's half-ball agrees on, the lamp's blocker
+//! is found as for a set that disagrees (the blocked node nearest the
+//! point comes from the wide set), and a penumbra that wants a level
+//! coarser than the mesh's is sized by it; a narrower one the point's own
+//! nodes would have seen, so their answer stands.
 //!
 //! Only lamps are asked (lights with a radius to size a penumbra by). The
 //! wide set's nodes are mesh nodes, demanded and filled with the
@@ -184,7 +185,8 @@ impl WideScratch {
         self.mixed[word]
     }
 
-    /// The wide set's nodes of the last point [`Self::look`] walked, each with whether it sees light number `light`.
+    /// The wide set's nodes of the last point [`Self::look`] walked, each
+    /// with whether it sees light number `light`.
     pub fn seen_from(&self, light: usize) -> impl Iterator<Item = (IVec3, bool)> + '_ {
         let words = self.asked.len();
         let (word, bit) = (light / 64, light % 64);
