@@ -180,15 +180,17 @@ fn the_gpu_backend_sizes_penumbrae_as_the_cpu_does() {
         return;
     };
     // Half the row, about the middle (lavapipe is slow): the umbra's end
-    // and the far penumbra.
+    // and the far penumbra; `wide` on the finer lattice where its wide
+    // sets change the row (the test above).
     let cases = [
-        (Method::Lmm1, Penumbra::Blocker),
-        (Method::Lmm, Penumbra::Blocker),
-        (Method::Lmm1, Penumbra::Wide),
+        (Method::Lmm1, Penumbra::Blocker, None),
+        (Method::Lmm, Penumbra::Blocker, None),
+        (Method::Lmm1, Penumbra::Wide, Some(0.03)),
     ];
-    for (method, penumbra) in cases {
+    for (method, penumbra, h) in cases {
         let mut settings = row_settings(method, penumbra, 1);
         settings.width = PIXELS / 2;
+        settings.lightmesh.h = h;
         let (cpu, cpu_stats) = render_with_stats(wall_scene(true), &settings);
         let (image, stats) = render_on(&mut gpu, wall_scene(true), &settings);
         let rays = |stats: &FrameStats| stats.lightmesh.unwrap().blocker_rays;
