@@ -263,7 +263,7 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
-    use crate::lightmesh::enclosure::blocks_some;
+    use crate::lightmesh::enclosure::leave_out_enclosed;
     use crate::lightmesh::masks::{split, BrickEnclosure, MaskStore};
 
     const H: f32 = 0.1;
@@ -313,9 +313,7 @@ mod tests {
         for node in &mut nodes {
             *node *= steps;
         }
-        nodes.retain(|&node| {
-            !(bricks.is_enclosed(node) && bricks.mask(node).is_some_and(|m| blocks_some(&m, reach)))
-        });
+        leave_out_enclosed(&mut nodes, bricks, reach);
         let mut all = reach.to_vec();
         let mut any = vec![0; reach.len()];
         for &node in &nodes {

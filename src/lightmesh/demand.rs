@@ -107,10 +107,11 @@ impl BrickTables {
 impl LightMesh {
     /// What `points` need: reaching lights per point and needed bits per
     /// node, in bricks: each point's half-ball for its lights and, with
-    /// `penumbra: wide`, its wide set for its lamps (`super::wide`). The tables grow with the number of distinct bricks
-    /// the points touch, so their size is checked against the memory limit
-    /// as they grow: a lattice far too fine for the view is refused here,
-    /// before it can exhaust memory.
+    /// `penumbra: wide`, its wide set for its lamps (`super::wide`). The
+    /// tables grow with the number of distinct bricks the points touch, so
+    /// their size is checked against the memory limit as they grow: a
+    /// lattice far too fine for the view is refused here, before it can
+    /// exhaust memory.
     pub fn demand(
         &self,
         points: &[ShadingPoint],

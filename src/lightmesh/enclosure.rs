@@ -35,7 +35,7 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
 use super::demand::Demand;
-use super::masks::{join, BrickEnclosure, NodeMask, BRICK_NODES};
+use super::masks::{join, BrickCache, BrickEnclosure, NodeMask, BRICK_NODES};
 use super::LightMesh;
 use crate::accel::{Ray, World};
 
@@ -97,6 +97,18 @@ pub fn is_enclosed(world: &World, at: Vec3, reach: f32) -> bool {
 pub fn blocks_some(mask: &NodeMask, lights: &[u64]) -> bool {
     (lights.iter().enumerate())
         .any(|(word, &wanted)| wanted & mask.valid(word) & !mask.visible(word) != 0)
+}
+
+/// LMM1's stand-in for the point-to-node tests: leaves out of `nodes` those
+/// inside closed geometry (their flag settled by the enclosure stage) that
+/// are blocked from some light of `lights`.
+pub fn leave_out_enclosed(nodes: &mut Vec<IVec3>, bricks: &mut BrickCache, lights: &[u64]) {
+    nodes.retain(|&node| {
+        !(bricks.is_enclosed(node)
+            && bricks
+                .mask(node)
+                .is_some_and(|mask| blocks_some(&mask, lights)))
+    });
 }
 
 impl LightMesh {

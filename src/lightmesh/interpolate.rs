@@ -12,7 +12,7 @@
 use glam::IVec3;
 
 use super::agreement::Agreement;
-use super::enclosure::blocks_some;
+use super::enclosure::leave_out_enclosed;
 use super::kernel::{Kernel, Weights};
 use super::lamp_disk;
 use super::masks::BrickCache;
@@ -105,11 +105,50 @@ struct InterpolationSet {
     nodes: Vec<IVec3>,
     /// The kernel's weight of each node.
     weights: Vec<u32>,
+    sight: Sight,
+}
+
+/// What the nodes of a set see of the lights asked about.
+#[derive(Default)]
+pub(super) struct Sight {
     /// The visible-light words of each node, node after node.
-    visible: Vec<u64>,
+    pub visible: Vec<u64>,
     /// Per light word: lights visible from every node, from some node.
-    all: Vec<u64>,
-    any: Vec<u64>,
+    pub all: Vec<u64>,
+    pub any: Vec<u64>,
+}
+
+impl Sight {
+    /// What `nodes` see of the lights `asked`, read through `bricks`;
+    /// every bit it reads was filled from the frame's demand.
+    pub fn tally(&mut self, nodes: &[IVec3], asked: &[u64], bricks: &mut BrickCache) {
+        self.visible.clear();
+        self.all.clear();
+        self.all.extend_from_slice(asked);
+        self.any.clear();
+        self.any.resize(asked.len(), 0);
+        for &node in nodes {
+            let mask = bricks.mask(node);
+            for (word, &asked) in asked.iter().enumerate() {
+                debug_assert_eq!(
+                    mask.map_or(0, |m| m.valid(word)) & asked,
+                    asked,
+                    "formula (2) read a mask bit that the fill stage did not compute"
+                );
+                let seen = mask.map_or(0, |m| m.visible(word)) & asked;
+                self.visible.push(seen);
+                self.all[word] &= seen;
+                self.any[word] |= seen;
+            }
+        }
+    }
+
+    /// Whether each node, in order, sees light number `light`.
+    pub fn sees(&self, light: usize) -> impl Iterator<Item = bool> + '_ {
+        let words = self.all.len();
+        let (word, bit) = (light / 64, light % 64);
+        (self.visible.iter().skip(word).step_by(words)).map(move |&seen| seen >> bit & 1 == 1)
+    }
 }
 
 impl LightMesh {
@@ -164,14 +203,15 @@ impl LightMesh {
             wide,
             bricks,
         } = scratch;
-        set.all.clear();
-        set.all.resize(reach.len(), 0);
+        let sight = &mut set.sight;
+        sight.all.clear();
+        sight.all.resize(reach.len(), 0);
         // LMM's set is what the point sees, which no summary knows.
         let total = if !point_to_node_tests
-            && agreement.settle(point.position, reach, bricks, &mut set.all)
+            && agreement.settle(point.position, reach, bricks, &mut sight.all)
         {
             counts.settled = 1;
-            set.any.clone_from(&set.all);
+            sight.any.clone_from(&sight.all);
             // Each light is seen by every node of the set or by none: none
             // below needs the set's nodes or its weight.
             0
@@ -196,11 +236,9 @@ impl LightMesh {
         let InterpolationSet {
             nodes,
             weights,
-            visible,
-            all,
-            any,
+            sight,
         } = set;
-        let words = reach.len();
+        let (all, any) = (&sight.all, &sight.any);
         // The lamps the point's own set agrees on but its wide set does
         // not: it lies in their penumbra, beyond the set's reach.
         wide.look(
@@ -251,10 +289,7 @@ impl LightMesh {
                     } else {
                         // The nodes disagree on this light: the point is in
                         // its penumbra, or near it.
-                        let sees = || {
-                            (visible.iter().skip(word).step_by(words))
-                                .map(move |&seen| seen >> bit & 1 == 1)
-                        };
+                        let sees = || sight.sees(light);
                         let fixed = || {
                             let seen: u32 = (sees().zip(weights.iter()))
                                 .filter(|&(sees, _)| sees)
@@ -299,9 +334,7 @@ impl LightMesh {
         let InterpolationSet {
             nodes,
             weights,
-            visible,
-            all,
-            any,
+            sight,
         } = set;
         nodes.clear();
         self.lattice
@@ -316,15 +349,7 @@ impl LightMesh {
                 !world.occluded(&Ray::new(origin, x - origin, 1.0))
             });
         } else {
-            // LMM1's stand-in for those tests: nodes inside closed
-            // geometry, settled once per node by the enclosure stage,
-            // where they are blocked from a light the point asks for.
-            nodes.retain(|&node| {
-                !(bricks.is_enclosed(node)
-                    && bricks
-                        .mask(node)
-                        .is_some_and(|mask| blocks_some(&mask, reach)))
-            });
+            leave_out_enclosed(nodes, bricks, reach);
         }
         counts.interp_set = nodes.len() as u64;
         let kernel = self.weights();
@@ -343,26 +368,7 @@ impl LightMesh {
         // Where every node agrees (far from shadow edges, the common case)
         // a light is fully visible or fully hidden; only lights the nodes
         // disagree on need their visible nodes counted.
-        let words = reach.len();
-        visible.clear();
-        all.clear();
-        all.extend_from_slice(reach);
-        any.clear();
-        any.resize(words, 0);
-        for &node in nodes.iter() {
-            let mask = bricks.mask(node);
-            for word in 0..words {
-                debug_assert_eq!(
-                    mask.map_or(0, |m| m.valid(word)) & reach[word],
-                    reach[word],
-                    "formula (2) read a mask bit that the fill stage did not compute"
-                );
-                let seen = mask.map_or(0, |m| m.visible(word)) & reach[word];
-                visible.push(seen);
-                all[word] &= seen;
-                any[word] |= seen;
-            }
-        }
+        sight.tally(nodes, reach, bricks);
         total
     }
 

@@ -25,12 +25,12 @@
 //! the mesh's origin, so a coarser level's nodes are nodes of the mesh):
 //! narrow at a contact, wide far from the occluder. Those nodes sample the
 //! lamp's disk as the point sees it, a disk of radius kI·h_k across the
-//! light's direction (`super::lamp_disk`). A level node's answer is its segment's to the light: read from the mesh's
-//! masks where the node is the mesh's and its bit is known, remembered
-//! from a neighbouring point ([`LevelScratch`]), or traced; nothing is
-//! kept between frames. Below the finest level the light is taken as
-//! visible or not as the centre ray found: a hard shadow, which is what
-//! the lamp gives there.
+//! light's direction (`super::lamp_disk`). A level node's answer is its
+//! segment's to the light: read from the mesh's masks where the node is
+//! the mesh's and its bit is known, remembered from a neighbouring point
+//! ([`LevelScratch`]), or traced; nothing is kept between frames. Below
+//! the finest level the light is taken as visible or not as the centre ray
+//! found: a hard shadow, which is what the lamp gives there.
 //!
 //! Points whose nodes all agree on a light (far from any shadow edge, most
 //! points) trace nothing and keep their value; with `penumbra: wide`,
@@ -157,10 +157,11 @@ fn power_of_two(exponent: i32) -> f32 {
 }
 
 /// One thread's working space for the lattice levels: the nodes of the
-/// lamp disk at hand (`super::lamp_disk`), the answers its points' segments gave, and
-/// per light the static triangle its last blocked segment crossed (the
-/// next segments to that light, from nodes close by, mostly cross it too:
-/// one triangle test instead of a walk, with the walk's answer).
+/// lamp disk at hand (`super::lamp_disk`), the answers its points'
+/// segments gave, and per light the static triangle its last blocked
+/// segment crossed (the next segments to that light, from nodes close by,
+/// mostly cross it too: one triangle test instead of a walk, with the
+/// walk's answer).
 #[derive(Default)]
 pub struct LevelScratch {
     pub nodes: Vec<(IVec3, f32)>,

@@ -28,7 +28,8 @@
 use glam::{IVec3, Vec3};
 
 use super::agreement::Agreement;
-use super::enclosure::blocks_some;
+use super::enclosure::leave_out_enclosed;
+use super::interpolate::Sight;
 use super::lattice::{Lattice, MAX_NODE_COORDINATE};
 use super::masks::BrickCache;
 use super::LightMesh;
@@ -94,12 +95,12 @@ pub struct WideScratch {
     /// ones its own set agrees on, which it asks the wide set about.
     demanded: Vec<u64>,
     asked: Vec<u64>,
-    /// The wide set's kept nodes and, node after node, the asked lamps
-    /// each sees.
+    /// The wide set's kept nodes and what they see of the asked lamps.
     nodes: Vec<IVec3>,
-    visible: Vec<u64>,
-    all: Vec<u64>,
-    any: Vec<u64>,
+    sight: Sight,
+    /// The summary's answer for a settled point (unread: a settled wide
+    /// set disagrees on nothing).
+    settled: Vec<u64>,
     /// The asked lamps the wide set disagrees on.
     mixed: Vec<u64>,
 }
@@ -124,9 +125,8 @@ impl WideScratch {
             demanded: vec![0; words],
             asked: vec![0; words],
             nodes: Vec::new(),
-            visible: Vec::new(),
-            all: vec![0; words],
-            any: vec![0; words],
+            sight: Sight::default(),
+            settled: vec![0; words],
             mixed: vec![0; words],
         }
     }
@@ -147,7 +147,7 @@ impl WideScratch {
             self.asked[word] = self.demanded[word] & (all[word] | !any[word]);
         }
         if self.asked.iter().all(|&word| word == 0)
-            || (self.agreement).settle(p, &self.asked, bricks, &mut self.all)
+            || (self.agreement).settle(p, &self.asked, bricks, &mut self.settled)
         {
             return;
         }
@@ -155,27 +155,10 @@ impl WideScratch {
         self.ball.nodes(p, n, &mut self.nodes);
         // The enclosed nodes left out are those blocked from a lamp the
         // wide set was demanded for (another light's bit may be unknown).
-        let demanded = &self.demanded;
-        self.nodes.retain(|&node| {
-            !(bricks.is_enclosed(node)
-                && bricks
-                    .mask(node)
-                    .is_some_and(|mask| blocks_some(&mask, demanded)))
-        });
-        self.visible.clear();
-        self.all.copy_from_slice(&self.asked);
-        self.any.fill(0);
-        for &node in &self.nodes {
-            let mask = bricks.mask(node);
-            for (word, &asked) in self.asked.iter().enumerate() {
-                let seen = mask.map_or(0, |m| m.visible(word)) & asked;
-                self.visible.push(seen);
-                self.all[word] &= seen;
-                self.any[word] |= seen;
-            }
-        }
+        leave_out_enclosed(&mut self.nodes, bricks, &self.demanded);
+        self.sight.tally(&self.nodes, &self.asked, bricks);
         for word in 0..reach.len() {
-            self.mixed[word] = self.any[word] & !self.all[word];
+            self.mixed[word] = self.sight.any[word] & !self.sight.all[word];
         }
     }
 
@@ -188,11 +171,7 @@ impl WideScratch {
     /// The wide set's nodes of the last point [`Self::look`] walked, each
     /// with whether it sees light number `light`.
     pub fn seen_from(&self, light: usize) -> impl Iterator<Item = (IVec3, bool)> + '_ {
-        let words = self.asked.len();
-        let (word, bit) = (light / 64, light % 64);
-        let sees =
-            (self.visible.iter().skip(word).step_by(words)).map(move |&seen| seen >> bit & 1 == 1);
-        self.nodes.iter().copied().zip(sees)
+        self.nodes.iter().copied().zip(self.sight.sees(light))
     }
 }
 
