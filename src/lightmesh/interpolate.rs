@@ -285,7 +285,12 @@ impl LightMesh {
                         self.blocker_share(penumbra_at, set, levels, bricks, &mut counts)
                             .unwrap_or(agreed)
                     } else if seen_by_all {
-                        Share::Full
+                        match self.penumbra.probes_grazing_lamps() {
+                            true => self
+                                .grazing_share(penumbra_at, levels, bricks, &mut counts)
+                                .unwrap_or(Share::Full),
+                            false => Share::Full,
+                        }
                     } else {
                         // The nodes disagree on this light: the point is in
                         // its penumbra, or near it.
@@ -414,11 +419,59 @@ impl LightMesh {
         let origin = offset_ray_origin(point.position, point.geometric_normal);
         let estimate = penumbra::estimate(origin, light, nearest_blocked, world)?;
         counts.blocker_rays += estimate.rays;
+        self.share_over_level(at, estimate, levels, bricks, counts)
+    }
+
+    /// The share of a lamp that every node of the point's set sees, where
+    /// it grazes the surface and a ray towards its point nearest the
+    /// surface finds a blocker ([`penumbra::grazing_estimate`]): over the
+    /// lamp disk of the level that blocker sizes. None where nothing was
+    /// found: the set's answer stands.
+    fn grazing_share(
+        &self,
+        at: PenumbraAt,
+        levels: &mut LevelScratch,
+        bricks: &mut BrickCache,
+        counts: &mut PointCounts,
+    ) -> Option<Share> {
+        let point = at.point;
+        let origin = offset_ray_origin(point.position, point.geometric_normal);
+        let light = &at.lights[at.light];
+        let estimate = penumbra::grazing_estimate(origin, point.geometric_normal, light, at.world)?;
+        counts.blocker_rays += estimate.rays;
+        self.share_over_level(at, estimate, levels, bricks, counts)
+    }
+
+    /// The share of light `at.light` over the lamp disk of the lattice
+    /// level whose radius comes nearest `estimate`'s, or the centre ray's
+    /// answer where the penumbra is too narrow for any level; None where
+    /// the estimate has no radius, or where the set is the wide set and
+    /// the penumbra no wider than the mesh's level.
+    fn share_over_level(
+        &self,
+        at: PenumbraAt,
+        estimate: penumbra::BlockerEstimate,
+        levels: &mut LevelScratch,
+        bricks: &mut BrickCache,
+        counts: &mut PointCounts,
+    ) -> Option<Share> {
+        let PenumbraAt {
+            point,
+            lights,
+            light: index,
+            world,
+            ..
+        } = at;
+        let light = &lights[index];
         let hard = match estimate.centre_visible {
             true => Share::Full,
             false => Share::Hidden,
         };
-        let level = penumbra::level(self.lattice, self.ki, estimate.radius?);
+        // The lamp's disk as the point sees it has the penumbra's radius;
+        // the level whose half-ball radius comes nearest it answers for
+        // its samples.
+        let radius = estimate.radius?;
+        let level = penumbra::level(self.lattice, self.ki, radius);
         // From the wide set, only a penumbra wider than the mesh's level
         // is sized: a narrower one the point's own nodes, which agree,
         // would have seen, so their answer stands.
@@ -428,7 +481,6 @@ impl LightMesh {
         let Some(level) = level else {
             return Some(hard);
         };
-        let radius = self.ki * level.h;
         let lamp = light.position()?;
         let LevelScratch {
             nodes,

@@ -85,14 +85,19 @@ pub fn disk_nodes(
     let distance = to_lamp.length();
     let light = to_lamp * (1.0 / distance);
     let (across, up) = disk_axes(light);
-    // Near the horizon the lift grows as 1/cosine: no sample moves past
-    // half the way to the lamp.
-    let cosine = light.dot(n).max(f32::MIN_POSITIVE);
-    let furthest = 0.5 * distance;
+    let lamp_height = to_lamp.dot(n);
     for &(x, y) in DISK.iter() {
         let offset = across * (radius * x) + up * (radius * y);
-        let lift = ((level.h - offset.dot(n)) / cosine).max(0.0).min(furthest);
-        let sample = (p + offset) + light * lift;
+        // Along the sample's own line to the lamp's centre, the fraction
+        // of the way that lifts it a step above the surface. Near the
+        // horizon that grows as 1/cosine: no sample moves past half the
+        // way.
+        let height = offset.dot(n);
+        let rise = (lamp_height - height).max(f32::MIN_POSITIVE);
+        // Not `clamp`: a NaN lifts by nothing here, as in the shader.
+        #[allow(clippy::manual_clamp)]
+        let lift = ((level.h - height) / rise).max(0.0).min(0.5);
+        let sample = (p + offset) + (to_lamp - offset) * lift;
         let node = (level.local(sample) + Vec3::splat(0.5)).floor().as_ivec3();
         out.push((node, offset.length_squared()));
     }

@@ -46,7 +46,7 @@ use serde::{Deserialize, Serialize};
 
 use super::lattice::Lattice;
 use crate::accel::{Ray, StaticTriangle, World};
-use crate::render::light::RenderLight;
+use crate::render::light::{RenderLight, SHADOW_SEGMENT_END};
 
 /// How formula (2) sizes each light's interpolation set.
 #[derive(
@@ -77,6 +77,12 @@ impl Penumbra {
 
     /// Whether points also ask their wide set.
     pub fn asks_wide_set(self) -> bool {
+        self == Penumbra::Wide
+    }
+
+    /// Whether lamps every node sees are probed at grazing incidence
+    /// ([`grazing_estimate`]).
+    pub fn probes_grazing_lamps(self) -> bool {
         self == Penumbra::Wide
     }
 }
@@ -121,13 +127,65 @@ pub fn estimate(
     // dynamic layer marked, since moved away: nothing to size by.
     let blocker = centre_blocker
         .or_else(|| blocker_distance(&light.shadow_ray(nearest_blocked), centre, world));
-    let radius =
-        blocker.map(|(z, distance)| light.lamp_radius * z / (distance - z).max(f32::MIN_POSITIVE));
     Some(BlockerEstimate {
-        radius,
+        radius: blocker.map(|blocker| penumbra_radius(light.lamp_radius, blocker)),
         centre_visible,
         rays: 1 + centre_visible as u64,
     })
+}
+
+/// Lamps whose centre lies within this cosine of a surface's tangent
+/// plane (seen from the point, against its normal) graze it.
+pub const GRAZING_COSINE: f32 = 0.3;
+
+/// The penumbra radius at a point on a surface of normal `normal` whose
+/// nodes all see a lamp that grazes it: the blocker of one ray towards
+/// the lamp's point nearest the surface. A half-ball stands above the
+/// surface, so its nodes sample only the half of the lamp's disk away
+/// from it: at grazing incidence an occluder standing on the surface (a
+/// pilaster on a wall) hides the lamp's near half from points in a thin
+/// wedge beside its shadow, and every node there sees the lamp. The ray
+/// finds that occluder. Returns `None` for a light without a lamp or not
+/// grazing the surface (nothing traced); the estimate's radius is `None`
+/// where the ray is clear.
+pub fn grazing_estimate(
+    origin: Vec3,
+    normal: Vec3,
+    light: &RenderLight,
+    world: &World,
+) -> Option<BlockerEstimate> {
+    let centre = light.position()?;
+    let to_lamp = centre - origin;
+    let height = to_lamp.dot(normal);
+    let grazing = height > 0.0 && height < GRAZING_COSINE * to_lamp.length();
+    if light.lamp_radius <= 0.0 || !grazing {
+        return None;
+    }
+    // Nearest the surface, but above its tangent plane.
+    let lowest = centre - normal * light.lamp_radius.min(0.5 * height);
+    let ray = Ray::new(origin, lowest - origin, SHADOW_SEGMENT_END);
+    let Some(lowest_blocker) = blocker_distance(&ray, lowest, world) else {
+        return Some(BlockerEstimate {
+            radius: None,
+            centre_visible: true,
+            rays: 1,
+        });
+    };
+    // The nodes see the centre, the point need not: its own ray decides
+    // the hard answer, and sizes the penumbra where it is blocked.
+    let centre_blocker = blocker_distance(&light.shadow_ray(origin), centre, world);
+    let blocker = centre_blocker.unwrap_or(lowest_blocker);
+    Some(BlockerEstimate {
+        radius: Some(penumbra_radius(light.lamp_radius, blocker)),
+        centre_visible: centre_blocker.is_none(),
+        rays: 2,
+    })
+}
+
+/// R·z / (D − z): the penumbra radius, at the point, of a lamp of radius
+/// `lamp_radius` behind a blocker at distance z of a ray of length D.
+fn penumbra_radius(lamp_radius: f32, (z, distance): (f32, f32)) -> f32 {
+    lamp_radius * z / (distance - z).max(f32::MIN_POSITIVE)
 }
 
 /// The level of `mesh_lattice` whose half-ball radius `ki`·h_k comes
@@ -238,10 +296,10 @@ impl LevelAnswers {
 }
 
 /// The distance from `ray`'s origin to the first thing it hits, and from
-/// its origin to the light's `centre`.
-fn blocker_distance(ray: &Ray, centre: Vec3, world: &World) -> Option<(f32, f32)> {
+/// its origin to `target`, the lamp's point it is aimed at.
+fn blocker_distance(ray: &Ray, target: Vec3, world: &World) -> Option<(f32, f32)> {
     let hit = world.closest_hit(ray)?;
-    let distance = (centre - ray.origin).length();
+    let distance = (target - ray.origin).length();
     Some((hit.t * distance, distance))
 }
 

@@ -11,7 +11,7 @@ use crate::scene::{Light, LightKind};
 /// exactly on a surface (a lamp on a wall) is not shadowed by that surface.
 /// It is relative to the segment's length, like the rounding error of the
 /// hit distance it absorbs; it is not a distance in metres.
-const SHADOW_SEGMENT_END: f32 = 1.0 - 1.0 / 65536.0;
+pub(crate) const SHADOW_SEGMENT_END: f32 = 1.0 - 1.0 / 65536.0;
 
 /// A light in render space.
 #[derive(Clone, Copy, Debug, PartialEq)]

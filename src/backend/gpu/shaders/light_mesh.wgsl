@@ -300,13 +300,16 @@ fn disk_axes(light: vec3<f32>) -> DiskAxes {
 }
 
 // `lamp_disk::disk_nodes`, one sample: the level node (step `h`) nearest
-// sample `offset` of the lamp's disk seen from `p`, lifted along `light`
-// until it stands a step above the surface, at most `furthest`.
-fn disk_node(p: vec3<f32>, n: vec3<f32>, light: vec3<f32>, cosine: f32, furthest: f32, offset: vec3<f32>, h: f32) -> vec3<i32> {
-    var lift = div(h - dot3(offset, n), cosine);
+// sample `offset` of the lamp's disk seen from `p`, lifted along its own
+// line to the lamp (`to_lamp` from `p`, `lamp_height` above the surface)
+// until it stands a step above the surface, at most half the way.
+fn disk_node(p: vec3<f32>, n: vec3<f32>, to_lamp: vec3<f32>, lamp_height: f32, offset: vec3<f32>, h: f32) -> vec3<i32> {
+    let height = dot3(offset, n);
+    let rise = lane_max(lamp_height - height, MIN_POSITIVE);
+    var lift = div(h - height, rise);
     lift = select(0.0, lift, lift > 0.0);
-    lift = select(lift, furthest, furthest < lift);
-    let sample = (p + offset) + scale3(light, lift);
+    lift = select(lift, 0.5, 0.5 < lift);
+    let sample = (p + offset) + scale3(to_lamp - offset, lift);
     return vec3<i32>(floor(lattice_local(sample, h) + vec3<f32>(0.5)));
 }
 
@@ -368,9 +371,7 @@ fn find_nearest_blocked(ball: HalfBall, wide: bool, reach_base: u32, word: u32, 
 // `LightMesh::blocker_share`: the share of `light` (bit `bit` of the
 // word) over the lamp disk of the lattice level its penumbra wants at the
 // point, found from the blocker of the centre ray or of the set's nearest
-// blocked node (`find_nearest_blocked`), each level node's segment traced.
-// From the `wide` set only a penumbra wider than the mesh's level is
-// sized: a narrower one gets SHARE_FIXED, the point's own agreed answer.
+// blocked node (`find_nearest_blocked`).
 fn blocker_share(point: ShadePoint, origin: vec3<f32>, bit: u32, light: Light, wide: bool) -> BlockerShare {
     if !is_lamp(light) {
         return BlockerShare(SHARE_FIXED, 0.0, 0u);
@@ -382,7 +383,48 @@ fn blocker_share(point: ShadePoint, origin: vec3<f32>, bit: u32, light: Light, w
     if centre_visible {
         blocker = blocker_hit(nearest_blocked, light.origin);
     }
-    var rays = select(1u, 2u, centre_visible);
+    return level_share(point, light, blocker, centre_visible, select(1u, 2u, centre_visible), wide);
+}
+
+// `penumbra::GRAZING_COSINE`.
+const GRAZING_COSINE: f32 = 0.3;
+
+// `LightMesh::grazing_share` (`penumbra::grazing_estimate`): for a lamp
+// every node of the set sees, grazing the surface, the blocker of a ray
+// towards the lamp's point nearest the surface sizes its share, and the
+// centre ray decides the hard answer; SHARE_FIXED where the lamp does not
+// graze or the ray is clear.
+fn grazing_share(point: ShadePoint, origin: vec3<f32>, light: Light) -> BlockerShare {
+    if !is_lamp(light) {
+        return BlockerShare(SHARE_FIXED, 0.0, 0u);
+    }
+    let n = point.geometric_normal;
+    let to_lamp = light.origin - origin;
+    let height = dot3(to_lamp, n);
+    if !(height > 0.0 && height < mul(GRAZING_COSINE, root(dot3(to_lamp, to_lamp)))) {
+        return BlockerShare(SHARE_FIXED, 0.0, 0u);
+    }
+    let lowest = light.origin - scale3(n, lane_min(light.lamp_radius, mul(0.5, height)));
+    let probe = blocker_hit(origin, lowest);
+    if !probe.found {
+        return BlockerShare(SHARE_FIXED, 0.0, 1u);
+    }
+    let centre = blocker_hit(origin, light.origin);
+    if centre.found {
+        return level_share(point, light, centre, false, 2u, false);
+    }
+    return level_share(point, light, probe, true, 2u, false);
+}
+
+// `LightMesh::share_over_level`: the share of `light` over the lamp disk
+// of the level whose radius comes nearest the one `blocker` sizes, each
+// level node's segment traced, or the centre ray's answer where the
+// penumbra is too narrow for any level; SHARE_FIXED where nothing was
+// found. From the `wide` set only a penumbra wider than the mesh's level
+// is sized: a narrower one gets SHARE_FIXED, the point's own agreed
+// answer. `rays` is what finding the blocker took.
+fn level_share(point: ShadePoint, light: Light, blocker: BlockerHit, centre_visible: bool, blocker_rays: u32, wide: bool) -> BlockerShare {
+    var rays = blocker_rays;
     let hard = select(SHARE_HIDDEN, SHARE_FULL, centre_visible);
     if !blocker.found {
         return BlockerShare(SHARE_FIXED, 0.0, rays);
@@ -404,22 +446,19 @@ fn blocker_share(point: ShadePoint, origin: vec3<f32>, bit: u32, light: Light, w
         return BlockerShare(SHARE_FIXED, 0.0, rays);
     }
     let h = mul(directory.header.h, ldexp(1.0, level));
-    let level_radius = mul(directory.header.radius, ldexp(1.0, level));
-    let inverse_radius_squared = div(1.0, mul(level_radius, level_radius));
+    let inverse_radius_squared = div(1.0, mul(radius, radius));
     var total = 0u;
     var seen = 0u;
     // `lamp_disk::disk_nodes`.
     let to_lamp = light.origin - point.position;
     let distance = root(dot3(to_lamp, to_lamp));
-    let toward = scale3(to_lamp, div(1.0, distance));
-    let axes = disk_axes(toward);
-    let cosine = lane_max(dot3(toward, point.geometric_normal), MIN_POSITIVE);
-    let furthest = mul(0.5, distance);
+    let axes = disk_axes(scale3(to_lamp, div(1.0, distance)));
+    let lamp_height = dot3(to_lamp, point.geometric_normal);
     var disk = DISK;
     for (var sample = 0u; sample < DISK_SAMPLES; sample++) {
         let at = disk[sample];
-        let offset = scale3(axes.across, mul(level_radius, at.x)) + scale3(axes.up, mul(level_radius, at.y));
-        let node = disk_node(point.position, point.geometric_normal, toward, cosine, furthest, offset, h);
+        let offset = scale3(axes.across, mul(radius, at.x)) + scale3(axes.up, mul(radius, at.y));
+        let node = disk_node(point.position, point.geometric_normal, to_lamp, lamp_height, offset, h);
         let weight = node_weight_at(dot3(offset, offset), inverse_radius_squared);
         total += weight;
         rays += 1u;
@@ -527,7 +566,21 @@ fn shade(index: u32) {
                 if share.kind == SHARE_PART {
                     term = scale3(value, share.share);
                 }
-            } else if (t.all >> bit & 1u) == 0u {
+            } else if (t.all >> bit & 1u) != 0u {
+                // Every node sees this light: where it grazes the surface
+                // a ray towards its point nearest the surface may find
+                // the point in a wedge of penumbra no node reaches.
+                if probes_grazing_lamps() {
+                    let share = grazing_share(point, origin, light);
+                    blocker_rays += share.rays;
+                    if share.kind == SHARE_HIDDEN {
+                        continue;
+                    }
+                    if share.kind == SHARE_PART {
+                        term = scale3(value, share.share);
+                    }
+                }
+            } else {
                 // The nodes disagree on this light.
                 var share = BlockerShare(SHARE_FIXED, 0.0, 0u);
                 if directory.header.blocker_penumbra != 0u {

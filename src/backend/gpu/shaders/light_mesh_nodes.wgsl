@@ -88,6 +88,11 @@ fn asks_wide_set() -> bool {
     return directory.header.blocker_penumbra == WIDE_PENUMBRA;
 }
 
+// `Penumbra::probes_grazing_lamps`.
+fn probes_grazing_lamps() -> bool {
+    return directory.header.blocker_penumbra == WIDE_PENUMBRA;
+}
+
 // Whether `light` has a lamp to size a penumbra by (`wide::lamps`).
 fn is_lamp(light: Light) -> bool {
     return light.directional == 0u && light.lamp_radius > 0.0;
