@@ -40,8 +40,9 @@ pub struct PointCounts {
     /// Points whose value came from what the nodes around them agree on,
     /// without walking their half-ball ([`Agreement`]).
     pub settled: u64,
-    /// Rays of `penumbra: blocker`: those that found a light's blocker
-    /// and the segments of a lattice level's nodes.
+    /// Rays of `penumbra: blocker` and `wide`: those that looked for a
+    /// light's blocker (grazing lamps' rays among them) and the segments
+    /// of a lattice level's nodes.
     pub blocker_rays: u64,
     /// Level segments answered without a ray: from the mesh's masks, or
     /// traced by a neighbouring point ([`penumbra::LevelAnswers`]).

@@ -15,11 +15,15 @@
 //! part towards the surface) is missing. So the samples are the disk's,
 //! spread over it by a fixed pattern ([`DISK`]); a sample under the
 //! surface, or too close to it for its nearest node to be above, is moved
-//! along the light's direction, which does not change the line it sees
-//! the lamp along, until it stands a level step above the surface. Each
-//! sample's nearest level node answers for it, so neighbouring points ask
-//! the same nodes (their answers are remembered, `penumbra::LevelAnswers`)
-//! and the GPU, doing the same arithmetic, asks the same ones.
+//! along its own line to the lamp's centre, which does not change the
+//! line it sees the lamp along, until it stands a level step above the
+//! surface. (Moved along the point's line instead, parallel to its own, a
+//! sample far along it asks about a wider disk than its offset says:
+//! under a grazing lamp that drew the lit side of a penumbra too dark.)
+//! Each sample's nearest level node answers for it, so neighbouring
+//! points ask the same nodes (their answers are remembered,
+//! `penumbra::LevelAnswers`) and the GPU, doing the same arithmetic, asks
+//! the same ones.
 //!
 //! STUDY.md measured it against the half-ball moved towards the lamp that
 //! it replaces: the boxes' penumbra error fell from 0.38/0.27/0.39 of

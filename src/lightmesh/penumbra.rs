@@ -19,13 +19,16 @@
 //!
 //! A half-ball of the light mesh's own step h resolves one width of
 //! penumbra well, 2·kI·h: with fewer nodes its shares turn coarse, and it
-//! cannot reach further. So the light's share is taken over the nodes of
+//! cannot reach further. So the light's share is taken over the lamp's
+//! disk as the point sees it, a disk of radius r_i across the light's
+//! direction (`super::lamp_disk`), its samples answered by the nodes of
 //! the lattice level whose radius kI·h_k comes nearest r_i, h_k = h·2^k
 //! for k from [`FINEST_LEVEL`] to [`COARSEST_LEVEL`] (the levels share
 //! the mesh's origin, so a coarser level's nodes are nodes of the mesh):
-//! narrow at a contact, wide far from the occluder. Those nodes sample the
-//! lamp's disk as the point sees it, a disk of radius kI·h_k across the
-//! light's direction (`super::lamp_disk`). A level node's answer is its
+//! narrow at a contact, wide far from the occluder. The disk has r_i
+//! itself, not the level's kI·h_k: a level stands for radii up to √2 from
+//! its own, and a disk that much too wide darkened the lit side of every
+//! penumbra (STUDY.md, "Grazing lamps"). A level node's answer is its
 //! segment's to the light: read from the mesh's masks where the node is
 //! the mesh's and its bit is known, remembered from a neighbouring point
 //! ([`LevelScratch`]), or traced; nothing is kept between frames. Below
@@ -34,7 +37,9 @@
 //!
 //! Points whose nodes all agree on a light (far from any shadow edge, most
 //! points) trace nothing and keep their value; with `penumbra: wide`,
-//! those whose wide set disagrees on a lamp are sized too (`super::wide`).
+//! those whose wide set disagrees on a lamp are sized too (`super::wide`),
+//! and so are those a lamp grazes where one ray finds the lamp's part
+//! nearest the surface hidden ([`grazing_estimate`]).
 //! Nothing here is kept from frame to frame, so reuse of the masks stays
 //! exact.
 
@@ -60,11 +65,14 @@ pub enum Penumbra {
     /// point's nodes disagree on it (closer to a real lamp than `fixed` on
     /// every scene of STUDY.md); lights without a lamp radius keep kI·h.
     Blocker,
-    /// As `blocker`, and also where the point's wide set (the half-ball
-    /// of twice the radius on every other node, `super::wide`) disagrees
-    /// on a lamp its own nodes agree on, so a penumbra wider than kI·h
-    /// reaches every point in it: the closest to a real lamp on every
-    /// scene of STUDY.md, at the cost BENCHMARKS.md measures.
+    /// As `blocker`, and also where the half-ball cannot see a penumbra:
+    /// where the point's wide set (the half-ball of twice the radius on
+    /// every other node, `super::wide`) disagrees on a lamp its own nodes
+    /// agree on, so a penumbra wider than kI·h reaches every point in it;
+    /// and where a lamp grazes the surface, so the wedge beside an
+    /// occluder standing on it is found ([`grazing_estimate`]). The
+    /// closest to a real lamp on every scene of STUDY.md, at the cost
+    /// BENCHMARKS.md measures.
     #[default]
     Wide,
 }
