@@ -379,18 +379,13 @@ impl LightMesh {
     }
 
     /// The share of light `at.light` at `at.point` by its blocker's
-    /// distance ([`penumbra`]): over the lamp disk of the lattice level
-    /// that the light's penumbra wants there, or the centre ray's answer
-    /// where the penumbra is too narrow for any level; its rays go to
-    /// `counts`. A level node's answer is its segment's: read from the
-    /// mesh's mask where the level is no finer than the mesh (its nodes
-    /// are the mesh's) and the bit is known, else remembered from a
-    /// neighbouring point (`levels`), else traced.
-    /// `set` is the point's interpolation set (or its wide set), each node
-    /// with whether it sees the light. The
-    /// share is None where nothing sizes the penumbra (a light without a
-    /// lamp, or a blocked node whose segment is found clear): the
-    /// half-ball's share stands there.
+    /// distance ([`penumbra`]), the blocker found from the centre ray or
+    /// from the blocked node of `set` nearest the point, and the share
+    /// taken as [`Self::share_over_level`] takes it; its rays go to
+    /// `counts`. `set` is the point's interpolation set (or its wide set),
+    /// each node with whether it sees the light. None where nothing sizes
+    /// the penumbra (a light without a lamp, or a blocked node whose
+    /// segment is found clear): the half-ball's share stands there.
     fn blocker_share(
         &self,
         at: PenumbraAt,
@@ -399,14 +394,7 @@ impl LightMesh {
         bricks: &mut BrickCache,
         counts: &mut PointCounts,
     ) -> Option<Share> {
-        let PenumbraAt {
-            point,
-            lights,
-            light: index,
-            world,
-            ..
-        } = at;
-        let light = &lights[index];
+        let point = at.point;
         // Ties (a lattice has many nodes at one distance) go to the least
         // coordinates, so the choice does not depend on the set's order.
         // Distances rounded as the half-ball rounds them.
@@ -418,7 +406,8 @@ impl LightMesh {
             })
             .map_or(point.position, |(_, node)| self.lattice.node_position(node));
         let origin = offset_ray_origin(point.position, point.geometric_normal);
-        let estimate = penumbra::estimate(origin, light, nearest_blocked, world)?;
+        let light = &at.lights[at.light];
+        let estimate = penumbra::estimate(origin, light, nearest_blocked, at.world)?;
         counts.blocker_rays += estimate.rays;
         self.share_over_level(at, estimate, levels, bricks, counts)
     }
@@ -447,7 +436,11 @@ impl LightMesh {
     /// level whose radius comes nearest `estimate`'s, or the centre ray's
     /// answer where the penumbra is too narrow for any level; None where
     /// the estimate has no radius, or where the set is the wide set and
-    /// the penumbra no wider than the mesh's level.
+    /// the penumbra no wider than the mesh's level. A level node's answer
+    /// is its segment's: read from the mesh's mask where the level is no
+    /// finer than the mesh (its nodes are the mesh's) and the bit is
+    /// known, else remembered from a neighbouring point (`levels`), else
+    /// traced.
     fn share_over_level(
         &self,
         at: PenumbraAt,

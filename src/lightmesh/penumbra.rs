@@ -314,6 +314,105 @@ fn blocker_distance(ray: &Ray, target: Vec3, world: &World) -> Option<(f32, f32)
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accel::world::WorldObject;
+    use crate::render::light::LightSource;
+    use glam::Affine3A;
+
+    /// A floor at y = 0 and, along z, the lamp-side face of a curb 7 cm
+    /// high at x = 0.1 (the face is what shadows the floor beyond it).
+    fn floor_and_curb() -> World {
+        let floor = [
+            Vec3::new(-4.0, 0.0, -4.0),
+            Vec3::new(4.0, 0.0, -4.0),
+            Vec3::new(4.0, 0.0, 4.0),
+            Vec3::new(-4.0, 0.0, 4.0),
+        ];
+        let curb = [
+            Vec3::new(0.1, 0.0, -4.0),
+            Vec3::new(0.1, 0.07, -4.0),
+            Vec3::new(0.1, 0.07, 4.0),
+            Vec3::new(0.1, 0.0, 4.0),
+        ];
+        let quad = [[0, 2, 1], [0, 3, 2]];
+        let object = |positions| WorldObject {
+            positions,
+            triangles: &quad,
+            to_render: Affine3A::IDENTITY,
+            dynamic: false,
+        };
+        World::build(&[object(&floor), object(&curb)])
+    }
+
+    fn lamp(position: Vec3, lamp_radius: f32) -> RenderLight {
+        RenderLight {
+            source: LightSource::Point { position },
+            power: Vec3::ONE,
+            range: None,
+            lamp_radius,
+        }
+    }
+
+    /// A lamp 30 cm above the floor, 1.5 m from the curb, radius 10 cm:
+    /// it meets the floor beyond the curb at cos θ ≈ 0.1.
+    const GRAZING_LAMP: Vec3 = Vec3::new(-1.5, 0.3, 0.0);
+
+    fn on_floor(x: f32) -> Vec3 {
+        Vec3::new(x, 1e-4, 0.0)
+    }
+
+    #[test]
+    fn a_grazing_lamp_is_sized_by_what_hides_its_part_nearest_the_surface() {
+        let world = floor_and_curb();
+        let light = lamp(GRAZING_LAMP, 0.1);
+        // In the wedge: the curb hides the lamp's lowest point, not its
+        // centre. The blocker is the curb, 0.7 m along the ray's 2.3.
+        let origin = on_floor(0.8);
+        let estimate = grazing_estimate(origin, Vec3::Y, &light, &world).expect("grazing");
+        assert!(estimate.centre_visible);
+        assert_eq!(estimate.rays, 2);
+        let lowest = GRAZING_LAMP - Vec3::Y * 0.1;
+        let distance = (lowest - origin).length();
+        let z = distance * (0.7 / 2.3);
+        let expected = 0.1 * z / (distance - z);
+        let radius = estimate.radius.expect("a blocker");
+        assert!(
+            (radius - expected).abs() < 1e-4,
+            "{radius} against {expected}"
+        );
+        // Further out the whole lamp clears the curb: one clear ray.
+        let clear = grazing_estimate(on_floor(1.5), Vec3::Y, &light, &world).expect("grazing");
+        assert_eq!(
+            (clear.radius, clear.centre_visible, clear.rays),
+            (None, true, 1)
+        );
+        // Close behind the curb it hides the centre too: the hard answer
+        // is the centre's, and so is the blocker.
+        let behind = grazing_estimate(on_floor(0.3), Vec3::Y, &light, &world).expect("grazing");
+        assert!(!behind.centre_visible && behind.radius.is_some());
+    }
+
+    #[test]
+    fn lamps_that_do_not_graze_or_have_no_radius_trace_nothing() {
+        let world = floor_and_curb();
+        let origin = on_floor(0.8);
+        let estimate = |light: &RenderLight| grazing_estimate(origin, Vec3::Y, light, &world);
+        // Overhead; in the tangent plane; under it; a bare point light.
+        assert_eq!(estimate(&lamp(Vec3::new(0.8, 2.0, 0.0), 0.1)), None);
+        assert_eq!(estimate(&lamp(Vec3::new(-1.5, 1e-4, 0.0), 0.1)), None);
+        assert_eq!(estimate(&lamp(Vec3::new(-1.5, -0.3, 0.0), 0.1)), None);
+        assert_eq!(estimate(&lamp(GRAZING_LAMP, 0.0)), None);
+        let sun = RenderLight {
+            source: LightSource::Directional {
+                towards: Vec3::new(-1.0, 0.1, 0.0).normalize(),
+            },
+            ..lamp(GRAZING_LAMP, 0.1)
+        };
+        assert_eq!(estimate(&sun), None);
+        // A lamp whose radius reaches under the tangent plane is probed
+        // at half its centre's height, above the floor: clear here.
+        let low = estimate(&lamp(Vec3::new(3.0, 0.05, 0.0), 0.1)).expect("grazing");
+        assert_eq!(low.radius, None);
+    }
 
     #[test]
     fn a_level_node_is_traced_once_per_light_and_level_until_the_scratch_fills() {
