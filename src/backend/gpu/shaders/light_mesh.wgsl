@@ -422,7 +422,7 @@ fn grazing_share(point: ShadePoint, origin: vec3<f32>, light: Light) -> BlockerS
 // penumbra is too narrow for any level; SHARE_FIXED where nothing was
 // found. From the `wide` set only a penumbra wider than the mesh's level
 // is sized: a narrower one gets SHARE_FIXED, the point's own agreed
-// answer. `rays` is what finding the blocker took.
+// answer. `blocker_rays` is what finding the blocker took.
 fn level_share(point: ShadePoint, light: Light, blocker: BlockerHit, centre_visible: bool, blocker_rays: u32, wide: bool) -> BlockerShare {
     var rays = blocker_rays;
     let hard = select(SHARE_HIDDEN, SHARE_FULL, centre_visible);
