@@ -51,7 +51,7 @@ use serde::{Deserialize, Serialize};
 
 use super::lattice::Lattice;
 use crate::accel::{Ray, StaticTriangle, World};
-use crate::render::light::{RenderLight, SHADOW_SEGMENT_END};
+use crate::render::light::{segment_to_lamp, RenderLight};
 
 /// How formula (2) sizes each light's interpolation set.
 #[derive(
@@ -171,7 +171,7 @@ pub fn grazing_estimate(
     }
     // Nearest the surface, but above its tangent plane.
     let lowest = centre - normal * light.lamp_radius.min(0.5 * height);
-    let ray = Ray::new(origin, lowest - origin, SHADOW_SEGMENT_END);
+    let ray = segment_to_lamp(origin, lowest);
     let Some(lowest_blocker) = blocker_distance(&ray, lowest, world) else {
         return Some(BlockerEstimate {
             radius: None,

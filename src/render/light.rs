@@ -11,7 +11,7 @@ use crate::scene::{Light, LightKind};
 /// exactly on a surface (a lamp on a wall) is not shadowed by that surface.
 /// It is relative to the segment's length, like the rounding error of the
 /// hit distance it absorbs; it is not a distance in metres.
-pub(crate) const SHADOW_SEGMENT_END: f32 = 1.0 - 1.0 / 65536.0;
+const SHADOW_SEGMENT_END: f32 = 1.0 - 1.0 / 65536.0;
 
 /// A light in render space.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -140,10 +140,17 @@ impl RenderLight {
         match self.source {
             LightSource::Directional { towards } => Ray::new(origin, towards, f32::INFINITY),
             LightSource::Point { position } | LightSource::Spot { position, .. } => {
-                Ray::new(origin, position - origin, SHADOW_SEGMENT_END)
+                segment_to_lamp(origin, position)
             }
         }
     }
+}
+
+/// The shadow segment from `origin` to `target`, a point of a lamp (its
+/// centre, or another point of it), ending short of it as every shadow
+/// segment does.
+pub fn segment_to_lamp(origin: Vec3, target: Vec3) -> Ray {
+    Ray::new(origin, target - origin, SHADOW_SEGMENT_END)
 }
 
 /// glTF's spot falloff: full inside the inner cone, nothing outside the
