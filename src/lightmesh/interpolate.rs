@@ -9,7 +9,7 @@
 //! only the nodes inside closed geometry (`super::enclosure`). An empty
 //! set falls back to formula (1) with real shadow rays.
 
-use glam::IVec3;
+use glam::{IVec3, Vec3};
 
 use super::agreement::Agreement;
 use super::enclosure::leave_out_enclosed;
@@ -254,6 +254,8 @@ impl LightMesh {
         // a light or the wide set disagrees on it; the sum runs in light
         // order.
         let at = PointLanes::new(point);
+        // Where the blocker's rays start, the same for every light.
+        let origin = offset_ray_origin(point.position, point.geometric_normal);
         for (word, &lit) in any.iter().enumerate() {
             let lit = lit | wide.mixed(word);
             for block_in_word in 0..64 / LANES {
@@ -270,6 +272,7 @@ impl LightMesh {
                     let in_wide_set = wide.mixed(word) >> bit & 1 == 1;
                     let penumbra_at = PenumbraAt {
                         point,
+                        origin,
                         lights: lights.lights(),
                         light,
                         world,
@@ -405,9 +408,8 @@ impl LightMesh {
                 (a.total_cmp(b)).then_with(|| a_node.to_array().cmp(&b_node.to_array()))
             })
             .map_or(point.position, |(_, node)| self.lattice.node_position(node));
-        let origin = offset_ray_origin(point.position, point.geometric_normal);
         let light = &at.lights[at.light];
-        let estimate = penumbra::estimate(origin, light, nearest_blocked, at.world)?;
+        let estimate = penumbra::estimate(at.origin, light, nearest_blocked, at.world)?;
         counts.blocker_rays += estimate.rays;
         self.share_over_level(at, estimate, levels, bricks, counts)
     }
@@ -424,10 +426,9 @@ impl LightMesh {
         bricks: &mut BrickCache,
         counts: &mut PointCounts,
     ) -> Option<Share> {
-        let point = at.point;
-        let origin = offset_ray_origin(point.position, point.geometric_normal);
         let light = &at.lights[at.light];
-        let estimate = penumbra::grazing_estimate(origin, point.geometric_normal, light, at.world)?;
+        let normal = at.point.geometric_normal;
+        let estimate = penumbra::grazing_estimate(at.origin, normal, light, at.world)?;
         counts.blocker_rays += estimate.rays;
         self.share_over_level(at, estimate, levels, bricks, counts)
     }
@@ -539,12 +540,13 @@ fn known_sight(bricks: &mut BrickCache, node: IVec3, light: usize) -> Option<boo
     (mask.valid(word) >> bit & 1 == 1).then(|| mask.visible(word) >> bit & 1 == 1)
 }
 
-/// Where a penumbra is sized: the point, the frame's lights and the
-/// number of the one sized, the world; and whether the set is the
-/// point's wide set (`super::wide`).
+/// Where a penumbra is sized: the point and its rays' origin, the frame's
+/// lights and the number of the one sized, the world; and whether the set
+/// is the point's wide set (`super::wide`).
 #[derive(Clone, Copy)]
 struct PenumbraAt<'a> {
     point: &'a ShadingPoint,
+    origin: Vec3,
     lights: &'a [RenderLight],
     light: usize,
     world: &'a World,
