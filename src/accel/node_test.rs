@@ -39,38 +39,34 @@ pub struct TraversalRay {
     /// every slab plane through its origin, and `0 * inv` would put it on the
     /// slab's edge instead of inside; such rays take a slower, exact path.
     parallel: BVec3A,
-    /// Axes along which the direction is negative: the near plane of a box
-    /// is then its max.
-    negative: [bool; 3],
+    /// Axes along which the direction is negative, `x` in bit 0, `y` in 1,
+    /// `z` in 2: the near plane of a box is then its max.
+    negative: u32,
     /// The same as a number, `x` in bit 2, `y` in 1, `z` in 0: obvhs' octant
     /// order of wide children.
     pub octant: u32,
-    /// `origin` and `inv_direction` per axis, splatted for the wide test.
-    origin4: [Vec4; 3],
-    inv_direction4: [Vec4; 3],
 }
 
 impl TraversalRay {
+    /// All three axes at once in SIMD lanes, with the operations of one
+    /// axis at a time, so with their bits: a ray's setup weighs on short
+    /// shadow rays.
     pub fn new(origin: Vec3, direction: Vec3) -> TraversalRay {
-        let inv = |d: f32| {
-            // Both zeros count as positive, as in obvhs' octant order.
-            if d == 0.0 {
-                INV_LIMIT
-            } else {
-                (1.0 / d).clamp(-INV_LIMIT, INV_LIMIT)
-            }
-        };
-        let inv_direction = Vec3A::new(inv(direction.x), inv(direction.y), inv(direction.z));
+        let direction = Vec3A::from(direction);
+        let limit = Vec3A::splat(INV_LIMIT);
+        // `f32::clamp`, NaN kept: `min`/`max` would replace it.
+        let inv = Vec3A::ONE / direction;
+        let inv = Vec3A::select(inv.cmplt(-limit), -limit, inv);
+        let inv = Vec3A::select(inv.cmpgt(limit), limit, inv);
+        // Both zeros count as positive, as in obvhs' octant order.
+        let parallel = direction.cmpeq(Vec3A::ZERO);
+        let negative = direction.cmplt(Vec3A::ZERO).bitmask();
         TraversalRay {
             origin: origin.into(),
-            inv_direction,
-            parallel: Vec3A::from(direction).cmpeq(Vec3A::ZERO),
-            negative: direction.to_array().map(|d| d < 0.0),
-            octant: (direction.x < 0.0) as u32 * 4
-                + (direction.y < 0.0) as u32 * 2
-                + (direction.z < 0.0) as u32,
-            origin4: origin.to_array().map(Vec4::splat),
-            inv_direction4: inv_direction.to_array().map(Vec4::splat),
+            inv_direction: Vec3A::select(parallel, limit, inv),
+            parallel,
+            negative,
+            octant: (negative & 1) << 2 | (negative & 2) | (negative >> 2),
         }
     }
 
@@ -79,6 +75,19 @@ impl TraversalRay {
     #[inline]
     pub fn has_parallel_axis(&self) -> bool {
         self.parallel.any()
+    }
+
+    /// Which of a box's planes along axis `k` the ray enters by: 0 for the
+    /// min, 1 for the max.
+    #[inline(always)]
+    pub fn near_side(&self, k: usize) -> usize {
+        (self.negative >> k & 1) as usize
+    }
+
+    /// The origin's coordinate along axis `k` in four lanes.
+    #[inline(always)]
+    fn origin4(&self, k: usize) -> Vec4 {
+        Vec4::splat(self.origin[k])
     }
 
     /// Entry `t` of the box if the ray meets it in `[0, t_cull]` (widened by
@@ -112,8 +121,9 @@ impl TraversalRay {
         for half in 0..2 {
             let mut slabs = [0, 1, 2].map(|k| {
                 let planes = &node.planes[k];
-                let side = self.negative[k] as usize;
-                let slab = |plane: Vec4| (plane - self.origin4[k]) * self.inv_direction4[k];
+                let side = self.near_side(k);
+                let (origin, inv_direction) = (self.origin4(k), Vec4::splat(self.inv_direction[k]));
+                let slab = |plane: Vec4| (plane - origin) * inv_direction;
                 (slab(planes[side][half]), slab(planes[side ^ 1][half]))
             });
             if self.has_parallel_axis() {
@@ -121,7 +131,8 @@ impl TraversalRay {
                 for (k, (near, far)) in slabs.iter_mut().enumerate() {
                     if self.parallel.test(k) {
                         let [min, max] = node.planes[k].map(|p| p[half]);
-                        let inside = min.cmple(self.origin4[k]) & self.origin4[k].cmple(max);
+                        let origin = self.origin4(k);
+                        let inside = min.cmple(origin) & origin.cmple(max);
                         *near = Vec4::select(inside, Vec4::NEG_INFINITY, Vec4::INFINITY);
                         *far = -*near;
                     }

@@ -9,7 +9,7 @@ use std::mem::MaybeUninit;
 use obvhs::{bvh2::Bvh2, fast_stack, faststack::FastStack};
 
 use super::node_test::{TraversalRay, BINARY_SCALE};
-use super::wide::{ChildRef, WideBvh};
+use super::wide::{ChildRef, WideBvh, WideNode};
 #[cfg(target_arch = "x86_64")]
 use node_test_path::Avx2Test;
 pub use node_test_path::NodeTestPath;
@@ -166,7 +166,10 @@ fn walk_wide_avx2(
     walk_wide_with(bvh, ray, order, t_cull, visit, slots, test);
 }
 
-/// The walk itself, with `test` as the node test.
+/// The walk itself, with `test` as the node test. The child visited next
+/// is kept in hand rather than pushed and popped at once: where a node
+/// lets one child through (most nodes, for most rays) the stack is not
+/// touched at all.
 #[inline(always)]
 fn walk_wide_with(
     bvh: &WideBvh,
@@ -178,11 +181,8 @@ fn walk_wide_with(
     test: impl ChildTest,
 ) {
     let mut stack = UninitStack::new(slots);
-    stack.push(Entry::ROOT);
-    while let Some(Entry { child, t }) = stack.pop() {
-        if t > t_cull * BINARY_SCALE {
-            continue;
-        }
+    let mut child = ChildRef::ROOT;
+    loop {
         if child.prim_count > 0 {
             let slots = child.index..child.index + child.prim_count;
             if !slots
@@ -191,53 +191,96 @@ fn walk_wide_with(
             {
                 return;
             }
-            continue;
-        }
-        let node = &bvh.nodes[child.index as usize];
-        let (hits, entry) = test.enter_children(ray, node, t_cull);
-        let first = stack.len();
-        // Children go on in descending rank, so the lowest rank is popped
-        // first. Ranked `slot ^ octant`, they come front to back, as obvhs
-        // placed them in their slots for the ray's octant; ranked by slot,
-        // they are sorted by entry `t` afterwards.
-        let flip = if order == Order::Octant {
-            ray.octant
         } else {
-            0
-        };
-        let mut ranks = flip_slots(hits, flip);
-        while ranks != 0 {
-            let rank = 31 - ranks.leading_zeros();
-            ranks &= !(1 << rank);
-            let slot = (rank ^ flip) as usize;
-            let child = ChildRef {
-                index: node.child[slot],
-                prim_count: u32::from(node.prim_count[slot]),
+            let node = &bvh.nodes[child.index as usize];
+            // Children are taken in ascending rank. Ranked `slot ^ octant`,
+            // they come front to back, as obvhs placed them in their slots
+            // for the ray's octant; ranked by slot, they are sorted by
+            // entry `t`.
+            let flip = if order == Order::Octant {
+                ray.octant
+            } else {
+                0
             };
-            stack.push(Entry {
-                child,
-                t: entry[slot],
-            });
+            let (ranks, entry) = test.ranked_children(ray, node, t_cull, flip);
+            if let Some(next) = descend(&mut stack, node, ranks, &entry, flip, order) {
+                child = next;
+                continue;
+            }
         }
-        if order == Order::Nearest {
-            sort_far_to_near(stack.pushed_since(first));
-        }
+        // The next child on the stack still entered within `t_cull`.
+        child = loop {
+            let Some(Entry { child, t }) = stack.pop() else {
+                return;
+            };
+            if t > t_cull * BINARY_SCALE {
+                continue;
+            }
+            break child;
+        };
     }
 }
 
-/// Moves bit `i` of an eight-bit mask to bit `i ^ flip`.
+/// Of the children of `node` the ray enters (by rank, as
+/// [`ChildTest::ranked_children`] gives them), returns the one to visit
+/// next and pushes the others so that they come off the stack in `order`;
+/// None when it enters none. The one returned was entered within `t_cull`
+/// by the test just made, so it needs no check.
 #[inline(always)]
-fn flip_slots(mut mask: u32, flip: u32) -> u32 {
-    if flip & 1 != 0 {
-        mask = (mask & 0x55) << 1 | (mask >> 1) & 0x55;
+fn descend(
+    stack: &mut UninitStack<Entry>,
+    node: &WideNode,
+    mut ranks: u32,
+    entry: &[f32; 8],
+    flip: u32,
+    order: Order,
+) -> Option<ChildRef> {
+    let pushed = |slot: usize| Entry {
+        child: node.child_ref(slot),
+        t: entry[slot],
+    };
+    if ranks == 0 {
+        return None;
     }
-    if flip & 2 != 0 {
-        mask = (mask & 0x33) << 2 | (mask >> 2) & 0x33;
+    let lowest = ranks.trailing_zeros();
+    if order == Order::Octant || ranks.is_power_of_two() {
+        ranks &= ranks - 1;
+        push_descending(stack, ranks, flip, pushed);
+        return Some(node.child_ref((lowest ^ flip) as usize));
     }
-    if flip & 4 != 0 {
-        mask = (mask & 0x0f) << 4 | (mask >> 4) & 0x0f;
+    // Nearest order, where `flip` is 0 and ranks are slots.
+    let highest = 31 - ranks.leading_zeros();
+    if ranks == 1 << lowest | 1 << highest {
+        // Two children, the commonest case after one: the nearer is taken,
+        // the lower slot on a tie, as the sort below would.
+        let (near, far) = (lowest as usize, highest as usize);
+        let (near, far) = if entry[far] < entry[near] {
+            (far, near)
+        } else {
+            (near, far)
+        };
+        stack.push(pushed(far));
+        return Some(node.child_ref(near));
     }
-    mask
+    let first = stack.len();
+    push_descending(stack, ranks, 0, pushed);
+    sort_far_to_near(stack.pushed_since(first));
+    stack.pop().map(|nearest| nearest.child)
+}
+
+/// Pushes the children whose ranks are set in `ranks`, highest rank first.
+#[inline(always)]
+fn push_descending(
+    stack: &mut UninitStack<Entry>,
+    mut ranks: u32,
+    flip: u32,
+    pushed: impl Fn(usize) -> Entry,
+) {
+    while ranks != 0 {
+        let rank = 31 - ranks.leading_zeros();
+        ranks &= !(1 << rank);
+        stack.push(pushed((rank ^ flip) as usize));
+    }
 }
 
 /// Orders a node's pushed children so the nearest is popped first; rarely
@@ -258,15 +301,4 @@ fn sort_far_to_near(pushed: &mut [Entry]) {
 struct Entry {
     child: ChildRef,
     t: f32,
-}
-
-impl Entry {
-    /// Where every walk starts: node 0, entered at 0.
-    const ROOT: Entry = Entry {
-        child: ChildRef {
-            index: 0,
-            prim_count: 0,
-        },
-        t: 0.0,
-    };
 }

@@ -31,6 +31,15 @@ impl WideNode {
             .map(|side| Vec3A::from_array([0, 1, 2].map(|k| self.planes[k][side][half][lane])));
         (!min.cmpgt(max).any()).then_some([min, max])
     }
+
+    /// Where the child in `slot` leads.
+    #[inline(always)]
+    pub fn child_ref(&self, slot: usize) -> ChildRef {
+        ChildRef {
+            index: self.child[slot],
+            prim_count: u32::from(self.prim_count[slot]),
+        }
+    }
 }
 
 /// A child to visit: an inner node (`prim_count == 0`) or a leaf's slots.
@@ -38,6 +47,14 @@ impl WideNode {
 pub struct ChildRef {
     pub index: u32,
     pub prim_count: u32,
+}
+
+impl ChildRef {
+    /// Where every walk starts: node 0.
+    pub const ROOT: ChildRef = ChildRef {
+        index: 0,
+        prim_count: 0,
+    };
 }
 
 pub struct WideBvh {

@@ -16,7 +16,8 @@
 
 use std::arch::x86_64::{
     __m256, _mm256_cmp_ps, _mm256_max_ps, _mm256_min_ps, _mm256_movemask_ps, _mm256_mul_ps,
-    _mm256_set1_ps, _mm256_setzero_ps, _mm256_sub_ps, _CMP_LE_OS,
+    _mm256_permutevar8x32_ps, _mm256_set1_epi32, _mm256_set1_ps, _mm256_setr_epi32,
+    _mm256_setzero_ps, _mm256_sub_ps, _mm256_xor_si256, _CMP_LE_OS,
 };
 
 use super::{TraversalRay, BINARY_SCALE};
@@ -27,11 +28,19 @@ impl TraversalRay {
     /// with no axis-parallel direction: those need the portable test's
     /// exact slab fix-up, rare and not worth a second copy (and checking
     /// for it once per ray rather than per node keeps this loop short).
+    /// The mask comes by rank: bit `r` tells whether child `r ^ flip` is
+    /// entered, the lanes reordered in one permutation where moving the
+    /// mask's bits took a dozen instructions.
     ///
     /// # Safety
     /// The CPU must have AVX2.
     #[inline(always)]
-    pub unsafe fn enter_children_avx2(&self, node: &WideNode, t_cull: f32) -> (u32, [f32; 8]) {
+    pub unsafe fn enter_children_avx2(
+        &self,
+        node: &WideNode,
+        t_cull: f32,
+        flip: u32,
+    ) -> (u32, [f32; 8]) {
         debug_assert!(!self.has_parallel_axis());
         let t_cull = _mm256_set1_ps(t_cull * BINARY_SCALE);
         let mut near = _mm256_setzero_ps();
@@ -40,7 +49,7 @@ impl TraversalRay {
         // AVX2, so the intrinsics it calls would not inline into it.
         for k in 0..3 {
             let planes = &node.planes[k];
-            let side = self.negative[k] as usize;
+            let side = self.near_side(k);
             let origin = _mm256_set1_ps(self.origin[k]);
             let inv_direction = _mm256_set1_ps(self.inv_direction[k]);
             let near_k = _mm256_sub_ps(eight_lanes(planes[side]), origin);
@@ -49,8 +58,13 @@ impl TraversalRay {
             far = _mm256_min_ps(far, _mm256_mul_ps(far_k, inv_direction));
         }
         let limit = _mm256_min_ps(_mm256_mul_ps(far, _mm256_set1_ps(BINARY_SCALE)), t_cull);
-        let hits = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OS>(near, limit)) as u32;
-        (hits, bytemuck::cast(near))
+        let entered = _mm256_cmp_ps::<_CMP_LE_OS>(near, limit);
+        let by_rank = _mm256_xor_si256(
+            _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+            _mm256_set1_epi32(flip as i32),
+        );
+        let ranks = _mm256_movemask_ps(_mm256_permutevar8x32_ps(entered, by_rank)) as u32;
+        (ranks, bytemuck::cast(near))
     }
 }
 

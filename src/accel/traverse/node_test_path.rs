@@ -37,15 +37,30 @@ pub struct Avx2Detected(());
 /// structs rather than closures, so that `#[inline(always)]` holds: LLVM
 /// kept a closure holding the test as a call per node.
 pub trait ChildTest {
-    fn enter_children(&self, ray: &TraversalRay, node: &WideNode, t_cull: f32) -> (u32, [f32; 8]);
+    /// Which children the ray enters within `t_cull`, by rank: bit `r`
+    /// for child `r ^ flip`; and every child's entry `t`, by slot.
+    fn ranked_children(
+        &self,
+        ray: &TraversalRay,
+        node: &WideNode,
+        t_cull: f32,
+        flip: u32,
+    ) -> (u32, [f32; 8]);
 }
 
 pub struct PortableTest;
 
 impl ChildTest for PortableTest {
     #[inline(always)]
-    fn enter_children(&self, ray: &TraversalRay, node: &WideNode, t_cull: f32) -> (u32, [f32; 8]) {
-        ray.enter_children(node, t_cull)
+    fn ranked_children(
+        &self,
+        ray: &TraversalRay,
+        node: &WideNode,
+        t_cull: f32,
+        flip: u32,
+    ) -> (u32, [f32; 8]) {
+        let (hits, entry) = ray.enter_children(node, t_cull);
+        (flip_slots(hits, flip), entry)
     }
 }
 
@@ -56,8 +71,29 @@ pub struct Avx2Test(pub Avx2Detected);
 #[cfg(target_arch = "x86_64")]
 impl ChildTest for Avx2Test {
     #[inline(always)]
-    fn enter_children(&self, ray: &TraversalRay, node: &WideNode, t_cull: f32) -> (u32, [f32; 8]) {
+    fn ranked_children(
+        &self,
+        ray: &TraversalRay,
+        node: &WideNode,
+        t_cull: f32,
+        flip: u32,
+    ) -> (u32, [f32; 8]) {
         // SAFETY: `self.0` proves that the CPU has AVX2.
-        unsafe { ray.enter_children_avx2(node, t_cull) }
+        unsafe { ray.enter_children_avx2(node, t_cull, flip) }
     }
+}
+
+/// Moves bit `i` of an eight-bit mask to bit `i ^ flip`.
+#[inline(always)]
+fn flip_slots(mut mask: u32, flip: u32) -> u32 {
+    if flip & 1 != 0 {
+        mask = (mask & 0x55) << 1 | (mask >> 1) & 0x55;
+    }
+    if flip & 2 != 0 {
+        mask = (mask & 0x33) << 2 | (mask >> 2) & 0x33;
+    }
+    if flip & 4 != 0 {
+        mask = (mask & 0x0f) << 4 | (mask >> 4) & 0x0f;
+    }
+    mask
 }
