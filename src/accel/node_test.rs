@@ -47,6 +47,13 @@ pub struct TraversalRay {
     pub octant: u32,
 }
 
+/// A ray's origin and inverse direction, each axis in four lanes.
+#[derive(Clone, Copy, Debug)]
+pub struct RayLanes {
+    origin: [Vec4; 3],
+    inv_direction: [Vec4; 3],
+}
+
 impl TraversalRay {
     /// All three axes at once in SIMD lanes, with the operations of one
     /// axis at a time, so with their bits: a ray's setup weighs on short
@@ -84,12 +91,6 @@ impl TraversalRay {
         (self.negative >> k & 1) as usize
     }
 
-    /// The origin's coordinate along axis `k` in four lanes.
-    #[inline(always)]
-    fn origin4(&self, k: usize) -> Vec4 {
-        Vec4::splat(self.origin[k])
-    }
-
     /// Entry `t` of the box if the ray meets it in `[0, t_cull]` (widened by
     /// the rounding bound), else `None`.
     #[inline(always)]
@@ -110,36 +111,49 @@ impl TraversalRay {
         (t_near <= t_far && t_near <= t_cull * BINARY_SCALE).then_some(t_near)
     }
 
+    /// The ray's origin and inverse direction splatted per axis, for
+    /// [`TraversalRay::enter_children`]: made once per walk, by the walks
+    /// that use it, rather than with every ray.
+    pub fn lanes(&self) -> RayLanes {
+        RayLanes {
+            origin: [0, 1, 2].map(|k| Vec4::splat(self.origin[k])),
+            inv_direction: [0, 1, 2].map(|k| Vec4::splat(self.inv_direction[k])),
+        }
+    }
+
     /// Which children of a wide node the ray meets in `[0, t_cull]`, as a
     /// bit per child, and their entry `t`s: [`TraversalRay::enter_box`] for
-    /// eight boxes at once.
+    /// eight boxes at once. `lanes` are this ray's.
     #[inline(always)]
-    pub fn enter_children(&self, node: &WideNode, t_cull: f32) -> (u32, [f32; 8]) {
+    pub fn enter_children(
+        &self,
+        lanes: &RayLanes,
+        node: &WideNode,
+        t_cull: f32,
+    ) -> (u32, [f32; 8]) {
         let t_cull = Vec4::splat(t_cull * BINARY_SCALE);
         let mut hits = 0;
         let mut entry = [Vec4::ZERO; 2];
         for half in 0..2 {
-            let mut slabs = [0, 1, 2].map(|k| {
+            let (mut near, mut far) = (Vec4::ZERO, Vec4::INFINITY);
+            // Loops, not `map` with closures: LLVM left those as calls
+            // where the whole walk is inlined into a query.
+            for k in 0..3 {
                 let planes = &node.planes[k];
                 let side = self.near_side(k);
-                let (origin, inv_direction) = (self.origin4(k), Vec4::splat(self.inv_direction[k]));
-                let slab = |plane: Vec4| (plane - origin) * inv_direction;
-                (slab(planes[side][half]), slab(planes[side ^ 1][half]))
-            });
-            if self.has_parallel_axis() {
-                // As in `enter_box`, for four boxes at once.
-                for (k, (near, far)) in slabs.iter_mut().enumerate() {
-                    if self.parallel.test(k) {
-                        let [min, max] = node.planes[k].map(|p| p[half]);
-                        let origin = self.origin4(k);
-                        let inside = min.cmple(origin) & origin.cmple(max);
-                        *near = Vec4::select(inside, Vec4::NEG_INFINITY, Vec4::INFINITY);
-                        *far = -*near;
-                    }
+                let slab = |plane: Vec4| (plane - lanes.origin[k]) * lanes.inv_direction[k];
+                let mut near_k = slab(planes[side][half]);
+                let mut far_k = slab(planes[side ^ 1][half]);
+                if self.has_parallel_axis() && self.parallel.test(k) {
+                    // As in `enter_box`, for four boxes at once.
+                    let (min, max) = (planes[0][half], planes[1][half]);
+                    let inside = min.cmple(lanes.origin[k]) & lanes.origin[k].cmple(max);
+                    near_k = Vec4::select(inside, Vec4::NEG_INFINITY, Vec4::INFINITY);
+                    far_k = -near_k;
                 }
+                near = near.max(near_k);
+                far = far.min(far_k);
             }
-            let near = slabs.iter().fold(Vec4::ZERO, |t, (near, _)| t.max(*near));
-            let far = slabs.iter().fold(Vec4::INFINITY, |t, (_, far)| t.min(*far));
             hits |= near.cmple((far * BINARY_SCALE).min(t_cull)).bitmask() << (4 * half);
             entry[half] = near;
         }

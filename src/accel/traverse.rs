@@ -145,7 +145,10 @@ fn walk_wide(
             // SAFETY: `detected` proves that the CPU has AVX2.
             unsafe { walk_wide_avx2(bvh, ray, order, t_cull, visit, slots, test) }
         }
-        _ => walk_wide_with(bvh, ray, order, t_cull, visit, slots, PortableTest),
+        _ => {
+            let test = PortableTest(ray.lanes());
+            walk_wide_with(bvh, ray, order, t_cull, visit, slots, test)
+        }
     }
 }
 

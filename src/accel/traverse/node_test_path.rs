@@ -3,7 +3,7 @@
 //! calls ([`ChildTest`]). Both tests answer bit for bit alike; tests
 //! compare them.
 
-use super::super::node_test::TraversalRay;
+use super::super::node_test::{RayLanes, TraversalRay};
 use super::super::wide::WideNode;
 
 /// Which code tests a wide node's children; only their speed differs.
@@ -48,7 +48,8 @@ pub trait ChildTest {
     ) -> (u32, [f32; 8]);
 }
 
-pub struct PortableTest;
+/// The portable test, with the lanes of the ray it walks.
+pub struct PortableTest(pub RayLanes);
 
 impl ChildTest for PortableTest {
     #[inline(always)]
@@ -59,7 +60,7 @@ impl ChildTest for PortableTest {
         t_cull: f32,
         flip: u32,
     ) -> (u32, [f32; 8]) {
-        let (hits, entry) = ray.enter_children(node, t_cull);
+        let (hits, entry) = ray.enter_children(&self.0, node, t_cull);
         (flip_slots(hits, flip), entry)
     }
 }
