@@ -33,9 +33,9 @@ impl NodeTestPath {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Avx2Detected(());
 
-/// A wide node's eight-child test as the walk's loop calls it. Unit
-/// structs rather than closures, so that `#[inline(always)]` holds: LLVM
-/// kept a closure holding the test as a call per node.
+/// A wide node's eight-child test as the walk's loop calls it. Structs
+/// rather than closures, so that `#[inline(always)]` holds: LLVM kept a
+/// closure holding the test as a call per node.
 pub trait ChildTest {
     /// Which children the ray enters within `t_cull`, by rank: bit `r`
     /// for child `r ^ flip`; and every child's entry `t`, by slot.
