@@ -18,6 +18,8 @@ use stack::UninitStack;
 
 mod node_test_path;
 mod stack;
+#[cfg(test)]
+mod visit_order;
 
 /// Called with a primitive slot (an index into the BVH's
 /// `primitive_indices`) and the culling distance, which it may lower;
