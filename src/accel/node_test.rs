@@ -42,9 +42,6 @@ pub struct TraversalRay {
     /// Axes along which the direction is negative, `x` in bit 0, `y` in 1,
     /// `z` in 2: the near plane of a box is then its max.
     negative: u32,
-    /// The same as a number, `x` in bit 2, `y` in 1, `z` in 0: obvhs' octant
-    /// order of wide children.
-    pub octant: u32,
 }
 
 /// A ray's origin and inverse direction, each axis in four lanes.
@@ -73,8 +70,16 @@ impl TraversalRay {
             inv_direction: Vec3A::select(parallel, limit, inv),
             parallel,
             negative,
-            octant: (negative & 1) << 2 | (negative & 2) | (negative >> 2),
         }
+    }
+
+    /// The axes along which the direction is negative as obvhs' octant
+    /// order of wide children numbers them: `x` in bit 2, `y` in 1, `z`
+    /// in 0.
+    #[inline(always)]
+    pub fn octant(&self) -> u32 {
+        let negative = self.negative;
+        (negative & 1) << 2 | (negative & 2) | (negative >> 2)
     }
 
     /// Whether the direction is exactly zero along some axis, which only

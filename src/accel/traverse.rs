@@ -187,6 +187,13 @@ fn walk_wide_with(
 ) {
     let mut stack = UninitStack::new(slots);
     let mut child = ChildRef::ROOT;
+    // Children are taken in ascending rank. Ranked `slot ^ octant`, they
+    // come front to back, as obvhs placed them in their slots for the
+    // ray's octant; ranked by slot, they are sorted by entry `t`.
+    let flip = match order {
+        Order::Octant => ray.octant(),
+        Order::Nearest => 0,
+    };
     loop {
         if child.prim_count > 0 {
             let slots = child.index..child.index + child.prim_count;
@@ -198,15 +205,6 @@ fn walk_wide_with(
             }
         } else {
             let node = &bvh.nodes[child.index as usize];
-            // Children are taken in ascending rank. Ranked `slot ^ octant`,
-            // they come front to back, as obvhs placed them in their slots
-            // for the ray's octant; ranked by slot, they are sorted by
-            // entry `t`.
-            let flip = if order == Order::Octant {
-                ray.octant
-            } else {
-                0
-            };
             let (ranks, entry) = test.ranked_children(ray, node, t_cull, flip);
             if let Some(next) = descend(&mut stack, node, ranks, &entry, flip, order) {
                 child = next;
