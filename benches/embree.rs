@@ -13,6 +13,12 @@
 //! the rays; and the loop's own cost per ray (measured on rays that miss
 //! the scene's bounds) is reported beside it, so Embree's traversal alone
 //! can be told apart from the binding.
+//!
+//! Embree runs twice: with its default scene flags, and robust
+//! (`RTC_SCENE_FLAG_ROBUST`, which gives up the optimisations that cost
+//! accuracy). `World` always keeps that guarantee (conservative box tests,
+//! the watertight triangle test), so the robust figures are the like for
+//! like ones.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -27,6 +33,13 @@ use ray_scenes::{pools, primary_rays, scenes, shadow_rays, Scene};
 
 /// Timed passes over each ray set; the fastest is kept.
 const REPEATS: usize = 3;
+
+/// The tracers of the table.
+const LMANIM: &str = "lmanim World";
+const EMBREE: &str = "Embree (embreex)";
+/// Embree with `RTC_SCENE_FLAG_ROBUST`, which gives up the optimisations
+/// that cost accuracy: the guarantee `World`'s traversal always keeps.
+const EMBREE_ROBUST: &str = "Embree robust (embreex)";
 
 /// One figure of the table: a tracer, a query, threads, rays per second
 /// and the answers it gave (hits, or occluded segments).
@@ -88,7 +101,7 @@ fn ours(world: &World, primary: &[Ray], shadow: &[Ray]) -> Vec<Figure> {
         ] {
             let (seconds, answers) = fastest(|| pool.install(|| trace(rays)));
             figures.push(Figure {
-                tracer: "lmanim World".into(),
+                tracer: LMANIM.into(),
                 query,
                 threads,
                 rays_per_second: rays.len() as f64 / seconds,
@@ -148,7 +161,7 @@ fn write_scene(dir: &Path, scene: &Scene, primary: &[Ray], shadow: &[Ray]) {
 }
 
 /// Embree's figures from `trace.py`, one line per figure:
-/// `query<TAB>threads<TAB>rays per second<TAB>answers`.
+/// `mode<TAB>query<TAB>threads<TAB>rays per second<TAB>answers`.
 fn embree(python: &Path, dir: &Path) -> Vec<Figure> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/embree/trace.py");
     let output = Command::new(python)
@@ -165,11 +178,16 @@ fn embree(python: &Path, dir: &Path) -> Vec<Figure> {
         .lines()
         .map(|line| {
             let fields: Vec<&str> = line.split('\t').collect();
-            let [query, threads, rate, answers] = fields[..] else {
+            let [mode, query, threads, rate, answers] = fields[..] else {
                 panic!("trace.py printed {line:?}");
             };
             Figure {
-                tracer: "Embree (embreex)".into(),
+                tracer: match mode {
+                    "default" => EMBREE,
+                    "robust" => EMBREE_ROBUST,
+                    other => panic!("trace.py ran Embree in mode {other:?}"),
+                }
+                .into(),
                 query: match query {
                     "primary" => "primary closest hit",
                     "shadow" => "shadow segments",
@@ -214,29 +232,31 @@ fn print_table(
     // Embree's traversal alone: its time per ray less the binding's loop.
     let rate = |tracer: &str, query: &str, threads: usize| {
         (figures.iter())
-            .find(|f| f.tracer.starts_with(tracer) && f.query == query && f.threads == threads)
+            .find(|f| f.tracer == tracer && f.query == query && f.threads == threads)
             .map(|f| f.rays_per_second)
     };
-    for (query, binding) in [
-        ("primary closest hit", "binding alone, closest"),
-        ("shadow segments", "binding alone, any hit"),
-    ] {
-        for threads in [1, 2] {
-            let (Some(ours), Some(embree), Some(loop_alone)) = (
-                rate("lmanim", query, threads),
-                rate("Embree", query, threads),
-                rate("Embree", binding, threads),
-            ) else {
-                continue;
-            };
-            let traversal = 1.0 / (1.0 / embree - 1.0 / loop_alone);
-            println!(
-                "{query}, {threads} thread(s): lmanim / Embree = {:.2} through the binding, \
-                 {:.2} against Embree's traversal alone ({:.2} Mrays/s)",
-                ours / embree,
-                ours / traversal,
-                traversal / 1e6
-            );
+    for embree in [EMBREE, EMBREE_ROBUST] {
+        for (query, binding) in [
+            ("primary closest hit", "binding alone, closest"),
+            ("shadow segments", "binding alone, any hit"),
+        ] {
+            for threads in [1, 2] {
+                let (Some(ours), Some(through_binding), Some(loop_alone)) = (
+                    rate(LMANIM, query, threads),
+                    rate(embree, query, threads),
+                    rate(embree, binding, threads),
+                ) else {
+                    continue;
+                };
+                let traversal = 1.0 / (1.0 / through_binding - 1.0 / loop_alone);
+                println!(
+                    "{query}, {threads} thread(s): lmanim / {embree} = {:.2} through the \
+                     binding, {:.2} against its traversal alone ({:.2} Mrays/s)",
+                    ours / through_binding,
+                    ours / traversal,
+                    traversal / 1e6
+                );
+            }
         }
     }
 }

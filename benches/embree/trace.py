@@ -1,8 +1,11 @@
 """Traces the rays `benches/embree.rs` wrote through Embree 4 (embreex).
 
 Usage: trace.py DIR REPEATS. Prints one line per figure, tab-separated:
-query, threads, rays per second (the fastest of REPEATS passes), answers
-(rays that hit, or segments found occluded).
+mode, query, threads, rays per second (the fastest of REPEATS passes),
+answers (rays that hit, or segments found occluded). The mode is
+"default" (Embree's own scene flags) or "robust" (RTC_SCENE_FLAG_ROBUST:
+no optimisation that costs accuracy, which is the guarantee lmanim's
+traversal keeps: conservative box tests and a watertight triangle test).
 
 embreex traces one ray per rtcIntersect1 / rtcOccluded1 call in a loop that
 holds Python's lock, so two threads means two processes, each building its
@@ -66,9 +69,9 @@ def ray_sets(positions, rays):
     return sets
 
 
-def worker(folder, share, shares, repeats, barrier, results):
+def worker(folder, robust, share, shares, repeats, barrier, results):
     positions, triangles, rays = load(folder)
-    scene = EmbreeScene()
+    scene = EmbreeScene(robust=robust)
     TriangleMesh(scene, positions, triangles)
     sets = {
         query: tuple(np.ascontiguousarray(a[share::shares]) for a in arrays)
@@ -83,11 +86,13 @@ def worker(folder, share, shares, repeats, barrier, results):
             results.put((query, share, time.perf_counter() - start, answers))
 
 
-def measure(folder, processes, repeats):
+def measure(folder, robust, processes, repeats):
     barrier = mp.Barrier(processes)
     results = mp.Queue()
     workers = [
-        mp.Process(target=worker, args=(folder, share, processes, repeats, barrier, results))
+        mp.Process(
+            target=worker, args=(folder, robust, share, processes, repeats, barrier, results)
+        )
         for share in range(processes)
     ]
     for w in workers:
@@ -107,15 +112,21 @@ def measure(folder, processes, repeats):
 def main():
     folder, repeats = sys.argv[1], int(sys.argv[2])
     _, _, rays = load(folder)
-    for processes in (1, 2):
-        for query, runs in measure(folder, processes, repeats).items():
-            count = len(rays[query.split("-")[0]][0])
-            # Pass r of every process ran between the same barriers: its
-            # time is the slowest share's.
-            by_pass = [runs[r * processes:(r + 1) * processes] for r in range(repeats)]
-            fastest = min(max(s for _, s, _ in one) for one in by_pass)
-            answers = sum(a for _, _, a in by_pass[0])
-            print(f"{query}\t{processes}\t{count / fastest:.0f}\t{answers}")
+    for mode, robust in (("default", False), ("robust", True)):
+        for processes in (1, 2):
+            report(mode, processes, measure(folder, robust, processes, repeats), rays, repeats)
+
+
+def report(mode, processes, passes, rays, repeats):
+    """Prints one line per query of `passes`, from `measure`."""
+    for query, runs in passes.items():
+        count = len(rays[query.split("-")[0]][0])
+        # Pass r of every process ran between the same barriers: its
+        # time is the slowest share's.
+        by_pass = [runs[r * processes:(r + 1) * processes] for r in range(repeats)]
+        fastest = min(max(s for _, s, _ in one) for one in by_pass)
+        answers = sum(a for _, _, a in by_pass[0])
+        print(f"{mode}\t{query}\t{processes}\t{count / fastest:.0f}\t{answers}")
 
 
 if __name__ == "__main__":

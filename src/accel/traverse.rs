@@ -1,22 +1,26 @@
 //! Stack traversal of the two BVH layouts (obvhs' BVH2, our [`WideBvh`]) with
-//! the conservative box tests of [`node_test`](super::node_test). One loop
-//! per layout serves both closest-hit and any-hit queries: the visitor sees
-//! each candidate primitive slot, may lower the culling distance, and may stop
+//! the conservative box tests of [`node_test`](super::node_test). The binary
+//! layout has one loop for closest-hit and any-hit queries, the wide one a
+//! loop per [`Order`] ([`nearest`] and [`octant`]): the visitor sees each
+//! candidate primitive slot, may lower the culling distance, and may stop
 //! the walk.
 
 use std::mem::MaybeUninit;
 
 use obvhs::{bvh2::Bvh2, fast_stack, faststack::FastStack};
 
-use super::node_test::{TraversalRay, BINARY_SCALE};
-use super::wide::{ChildRef, WideBvh, WideNode};
+use super::node_test::TraversalRay;
+use super::wide::{ChildRef, WideBvh};
+use nearest::NearestFirst;
 #[cfg(target_arch = "x86_64")]
 use node_test_path::Avx2Test;
 pub use node_test_path::NodeTestPath;
 use node_test_path::{ChildTest, PortableTest};
-use stack::UninitStack;
+use octant::OctantOrder;
 
+mod nearest;
 mod node_test_path;
+mod octant;
 mod stack;
 #[cfg(test)]
 mod visit_order;
@@ -89,13 +93,17 @@ pub enum Order {
     /// By entry `t`: what a closest-hit query needs to lower `t_cull` early.
     Nearest,
     /// By obvhs' octant slots, unsorted: nearly front to back, and cheaper
-    /// for any-hit queries, which stop at the first hit anyway.
+    /// for any-hit queries, which stop at the first hit anyway. The walk
+    /// keeps to the `t_cull` it was given for what it has queued (a lower
+    /// one still bounds the nodes it tests next): any-hit visitors never
+    /// lower it.
     Octant,
 }
 
-/// Walks a wide BVH in `order`, testing nodes by `path`. The children a
-/// node's test lets through go onto the stack with their entry `t`, and
-/// are skipped when popped beyond a `t_cull` lowered meanwhile.
+/// Walks a wide BVH in `order`, testing nodes by `path`. In nearest order
+/// the children a node's test lets through go onto the stack with their
+/// entry `t`, and are skipped when popped beyond a `t_cull` lowered
+/// meanwhile.
 pub fn traverse_wide(
     bvh: &WideBvh,
     ray: &TraversalRay,
@@ -107,18 +115,47 @@ pub fn traverse_wide(
     if bvh.nodes.is_empty() {
         return;
     }
-    // Each node visited pops one entry and pushes at most eight, so the stack
-    // never holds more than seven per level plus one. Kept on the call stack
-    // for the usual depths, and never cleared (see `stack`).
-    match 7 * bvh.depth + 1 {
+    match order {
+        Order::Nearest => walk_wide::<NearestFirst>(bvh, ray, path, t_cull, visit),
+        Order::Octant => walk_wide::<OctantOrder>(bvh, ray, path, t_cull, visit),
+    }
+}
+
+/// One of the wide walks, by the order it visits children in: what it
+/// keeps on its stack, how many of those, and the loop.
+trait Walk {
+    type Entry: Copy;
+
+    /// The most entries the stack holds on a tree `depth` nodes deep.
+    fn capacity(depth: usize) -> usize;
+
+    fn walk(
+        bvh: &WideBvh,
+        ray: &TraversalRay,
+        t_cull: f32,
+        visit: impl Visit,
+        slots: &mut [MaybeUninit<Self::Entry>],
+        test: impl ChildTest,
+    );
+}
+
+/// Runs walk `W` on a stack kept on the call stack for the usual depths,
+/// and never cleared (see `stack`).
+fn walk_wide<W: Walk>(
+    bvh: &WideBvh,
+    ray: &TraversalRay,
+    path: NodeTestPath,
+    t_cull: f32,
+    visit: impl Visit,
+) {
+    match W::capacity(bvh.depth) {
         n if n <= 128 => {
             let mut slots = [MaybeUninit::uninit(); 128];
-            walk_wide(bvh, ray, order, path, t_cull, visit, &mut slots);
+            walk_with_test::<W>(bvh, ray, path, t_cull, visit, &mut slots);
         }
-        n => walk_wide(
+        n => walk_with_test::<W>(
             bvh,
             ray,
-            order,
             path,
             t_cull,
             visit,
@@ -127,30 +164,25 @@ pub fn traverse_wide(
     }
 }
 
-/// Runs the walk with the node test `path` asks for.
+/// Runs walk `W` with the node test `path` asks for.
 #[inline(always)]
-fn walk_wide(
+fn walk_with_test<W: Walk>(
     bvh: &WideBvh,
     ray: &TraversalRay,
-    order: Order,
     path: NodeTestPath,
     t_cull: f32,
     visit: impl Visit,
-    slots: &mut [MaybeUninit<Entry>],
+    slots: &mut [MaybeUninit<W::Entry>],
 ) {
     match path {
         // Rays parallel to an axis need the portable test's exact fix-up,
         // so they take the portable walk as a whole.
         #[cfg(target_arch = "x86_64")]
         NodeTestPath::Avx2(detected) if !ray.has_parallel_axis() => {
-            let test = Avx2Test(detected);
             // SAFETY: `detected` proves that the CPU has AVX2.
-            unsafe { walk_wide_avx2(bvh, ray, order, t_cull, visit, slots, test) }
+            unsafe { walk_avx2::<W>(bvh, ray, t_cull, visit, slots, Avx2Test(detected)) }
         }
-        _ => {
-            let test = PortableTest(ray.lanes());
-            walk_wide_with(bvh, ray, order, t_cull, visit, slots, test)
-        }
+        _ => W::walk(bvh, ray, t_cull, visit, slots, PortableTest(ray.lanes())),
     }
 }
 
@@ -159,149 +191,26 @@ fn walk_wide(
 /// the wider test saves).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn walk_wide_avx2(
+fn walk_avx2<W: Walk>(
     bvh: &WideBvh,
     ray: &TraversalRay,
-    order: Order,
     t_cull: f32,
     visit: impl Visit,
-    slots: &mut [MaybeUninit<Entry>],
+    slots: &mut [MaybeUninit<W::Entry>],
     test: Avx2Test,
 ) {
-    walk_wide_with(bvh, ray, order, t_cull, visit, slots, test);
+    W::walk(bvh, ray, t_cull, visit, slots, test);
 }
 
-/// The walk itself, with `test` as the node test. The child visited next
-/// is kept in hand rather than pushed and popped at once: where a node
-/// lets one child through (most nodes, for most rays) the stack is not
-/// touched at all.
+/// Visits the slots of a leaf in order until `visit` says stop; returns
+/// whether the walk goes on. A loop, not `Iterator::all`: LLVM left that
+/// closure as a call, compiled without the walk's AVX2.
 #[inline(always)]
-fn walk_wide_with(
-    bvh: &WideBvh,
-    ray: &TraversalRay,
-    order: Order,
-    mut t_cull: f32,
-    mut visit: impl Visit,
-    slots: &mut [MaybeUninit<Entry>],
-    test: impl ChildTest,
-) {
-    let mut stack = UninitStack::new(slots);
-    let mut child = ChildRef::ROOT;
-    // Children are taken in ascending rank. Ranked `slot ^ octant`, they
-    // come front to back, as obvhs placed them in their slots for the
-    // ray's octant; ranked by slot, they are sorted by entry `t`.
-    let flip = match order {
-        Order::Octant => ray.octant(),
-        Order::Nearest => 0,
-    };
-    loop {
-        if child.prim_count > 0 {
-            let slots = child.index..child.index + child.prim_count;
-            if !slots
-                .into_iter()
-                .all(|slot| visit.visit(slot as usize, &mut t_cull))
-            {
-                return;
-            }
-        } else {
-            let node = &bvh.nodes[child.index as usize];
-            let (ranks, entry) = test.ranked_children(ray, node, t_cull, flip);
-            if let Some(next) = descend(&mut stack, node, ranks, &entry, flip, order) {
-                child = next;
-                continue;
-            }
-        }
-        // The next child on the stack still entered within `t_cull`.
-        child = loop {
-            let Some(Entry { child, t }) = stack.pop() else {
-                return;
-            };
-            if t > t_cull * BINARY_SCALE {
-                continue;
-            }
-            break child;
-        };
-    }
-}
-
-/// Of the children of `node` the ray enters (by rank, as
-/// [`ChildTest::ranked_children`] gives them), returns the one to visit
-/// next and pushes the others so that they come off the stack in `order`;
-/// None when it enters none. The one returned was entered within `t_cull`
-/// by the test just made, so it needs no check.
-#[inline(always)]
-fn descend(
-    stack: &mut UninitStack<Entry>,
-    node: &WideNode,
-    mut ranks: u32,
-    entry: &[f32; 8],
-    flip: u32,
-    order: Order,
-) -> Option<ChildRef> {
-    let pushed = |slot: usize| Entry {
-        child: node.child_ref(slot),
-        t: entry[slot],
-    };
-    if ranks == 0 {
-        return None;
-    }
-    let lowest = ranks.trailing_zeros();
-    if order == Order::Octant || ranks.is_power_of_two() {
-        ranks &= ranks - 1;
-        push_descending(stack, ranks, flip, pushed);
-        return Some(node.child_ref((lowest ^ flip) as usize));
-    }
-    // Nearest order, where `flip` is 0 and ranks are slots.
-    let highest = 31 - ranks.leading_zeros();
-    if ranks == 1 << lowest | 1 << highest {
-        // Two children, the commonest case after one: the nearer is taken,
-        // the lower slot on a tie, as the sort below would.
-        let (near, far) = (lowest as usize, highest as usize);
-        let (near, far) = if entry[far] < entry[near] {
-            (far, near)
-        } else {
-            (near, far)
-        };
-        stack.push(pushed(far));
-        return Some(node.child_ref(near));
-    }
-    let first = stack.len();
-    push_descending(stack, ranks, 0, pushed);
-    sort_far_to_near(stack.pushed_since(first));
-    stack.pop().map(|nearest| nearest.child)
-}
-
-/// Pushes the children whose ranks are set in `ranks`, highest rank first.
-#[inline(always)]
-fn push_descending(
-    stack: &mut UninitStack<Entry>,
-    mut ranks: u32,
-    flip: u32,
-    pushed: impl Fn(usize) -> Entry,
-) {
-    while ranks != 0 {
-        let rank = 31 - ranks.leading_zeros();
-        ranks &= !(1 << rank);
-        stack.push(pushed((rank ^ flip) as usize));
-    }
-}
-
-/// Orders a node's pushed children so the nearest is popped first; rarely
-/// more than two or three.
-#[inline(always)]
-fn sort_far_to_near(pushed: &mut [Entry]) {
-    for i in 1..pushed.len() {
-        let mut at = i;
-        while at > 0 && pushed[at - 1].t < pushed[at].t {
-            pushed.swap(at - 1, at);
-            at -= 1;
+fn visit_leaf(leaf: ChildRef, visit: &mut impl Visit, t_cull: &mut f32) -> bool {
+    for slot in leaf.index..leaf.index + leaf.prim_count {
+        if !visit.visit(slot as usize, t_cull) {
+            return false;
         }
     }
-}
-
-/// A child waiting on the stack of [`walk_wide`], with its entry `t`.
-#[derive(Clone, Copy, Debug)]
-struct Entry {
-    child: ChildRef,
-    t: f32,
+    true
 }

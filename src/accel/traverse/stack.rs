@@ -1,8 +1,8 @@
-//! The stack of the wide walk, on storage that is never cleared. The walk
-//! bounds its depth by the tree's (seven entries per level plus one, 128
-//! for the usual trees), and zeroing that much storage before every ray
-//! cost about a hundred instructions, as much as a node visit; a ray
-//! rarely uses more than a dozen entries. So only pushed entries are ever
+//! The stack of the wide walks, on storage that is never cleared. A walk
+//! bounds its depth by the tree's (128 entries for the usual trees), and
+//! zeroing that much storage before every ray cost about a hundred
+//! instructions, as much as a node visit; a ray rarely uses more than a
+//! dozen entries. So only pushed entries are ever
 //! written, and only written ones are read.
 
 use std::mem::MaybeUninit;
@@ -33,6 +33,14 @@ impl<'a, T: Copy> UninitStack<'a, T> {
         Some(unsafe { self.slots[self.len].assume_init() })
     }
 
+    /// The value on top, to change in place.
+    #[inline(always)]
+    pub fn top_mut(&mut self) -> Option<&mut T> {
+        let top = self.len.checked_sub(1)?;
+        // SAFETY: the slot is below `len`, so `push` wrote it.
+        Some(unsafe { self.slots[top].assume_init_mut() })
+    }
+
     #[inline(always)]
     pub fn len(&self) -> usize {
         self.len
@@ -60,7 +68,8 @@ mod tests {
         assert_eq!(stack.pop(), None);
         stack.push(1);
         stack.push(2);
-        stack.push(3);
+        stack.push(4);
+        *stack.top_mut().expect("a top") -= 1;
         stack.pushed_since(1).reverse();
         assert_eq!(stack.len(), 3);
         assert_eq!(

@@ -146,3 +146,58 @@ fn octant_order_visits_leaves_by_slot_flipped_by_the_octant() {
         [4, 6, 1]
     );
 }
+
+/// A root whose slots 1, 4 and 6 lead to inner nodes 1, 2 and 3, which
+/// hold leaves in slots {0, 5, 7}, {2, 3} and {6}; the leaf in slot `s`
+/// of node `n` is primitive slot `10 n + s`. Every box spans `x ∈ [0, 8]`,
+/// `y, z ∈ [0, 1]`, so both test rays enter them all.
+fn two_levels() -> WideBvh {
+    let node = |children: &[(usize, u32, u8)]| {
+        let present = |slot: usize| children.iter().find(|&&(s, _, _)| s == slot);
+        let bound = |slot: usize, side: usize, axis: usize| match present(slot) {
+            None => [f32::INFINITY, f32::NEG_INFINITY][side],
+            Some(_) => [0.0, [8.0, 1.0, 1.0][axis]][side],
+        };
+        WideNode {
+            planes: std::array::from_fn(|axis| {
+                std::array::from_fn(|side| {
+                    std::array::from_fn(|half| {
+                        Vec4::from_array(std::array::from_fn(|lane| {
+                            bound(half * 4 + lane, side, axis)
+                        }))
+                    })
+                })
+            }),
+            child: std::array::from_fn(|slot| present(slot).map_or(0, |&(_, to, _)| to)),
+            prim_count: std::array::from_fn(|slot| present(slot).map_or(0, |&(_, _, n)| n)),
+        }
+    };
+    let leaves = |n: u32, slots: &[usize]| {
+        let children: Vec<_> = slots.iter().map(|&s| (s, 10 * n + s as u32, 1)).collect();
+        node(&children)
+    };
+    WideBvh {
+        nodes: vec![
+            node(&[(1, 1, 0), (4, 2, 0), (6, 3, 0)]),
+            leaves(1, &[0, 5, 7]),
+            leaves(2, &[2, 3]),
+            leaves(3, &[6]),
+        ],
+        depth: 2,
+    }
+}
+
+#[test]
+fn octant_order_finishes_a_subtree_before_the_next_sibling() {
+    // Forwards the ranks are the slots; backwards (octant 4) they are
+    // `slot ^ 4`, at the root and in every child alike.
+    let bvh = two_levels();
+    assert_eq!(
+        visits(&bvh, &forwards(), Order::Octant, f32::INFINITY),
+        [10, 15, 17, 22, 23, 36]
+    );
+    assert_eq!(
+        visits(&bvh, &backwards(), Order::Octant, f32::INFINITY),
+        [22, 23, 36, 15, 17, 10]
+    );
+}
