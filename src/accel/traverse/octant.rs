@@ -38,7 +38,7 @@ impl Walk for OctantOrder {
     fn walk(
         bvh: &WideBvh,
         ray: &TraversalRay,
-        t_cull: f32,
+        mut t_cull: f32,
         mut visit: impl Visit,
         slots: &mut [MaybeUninit<Group>],
         test: impl ChildTest,
@@ -47,7 +47,6 @@ impl Walk for OctantOrder {
         // Ranked `slot ^ octant`, children come front to back, as obvhs
         // placed them in their slots for the ray's octant.
         let flip = ray.octant();
-        let mut t_cull = t_cull;
         let mut child = ChildRef::ROOT;
         loop {
             if child.prim_count > 0 {
