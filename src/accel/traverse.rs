@@ -10,13 +10,14 @@ use std::mem::MaybeUninit;
 use obvhs::{bvh2::Bvh2, fast_stack, faststack::FastStack};
 
 use super::node_test::TraversalRay;
-use super::wide::{ChildRef, WideBvh};
+use super::wide::{ChildRef, WideBvh, WideNode};
 use nearest::NearestFirst;
 #[cfg(target_arch = "x86_64")]
 use node_test_path::Avx2Test;
 pub use node_test_path::NodeTestPath;
 use node_test_path::{ChildTest, PortableTest};
 use octant::OctantOrder;
+use stack::UninitStack;
 
 mod nearest;
 mod node_test_path;
@@ -121,22 +122,39 @@ pub fn traverse_wide(
     }
 }
 
-/// One of the wide walks, by the order it visits children in: what it
-/// keeps on its stack, how many of those, and the loop.
+/// What sets the wide walks' orders apart: how children are ranked, what
+/// waits on the stack and how many of those, how a node's entered
+/// children are queued and how the next one comes back. [`walk`] is the
+/// loop both share.
 trait Walk {
     type Entry: Copy;
 
     /// The most entries the stack holds on a tree `depth` nodes deep.
     fn capacity(depth: usize) -> usize;
 
-    fn walk(
+    /// Children are ranked `slot ^ flip`.
+    fn flip(ray: &TraversalRay) -> u32;
+
+    /// Of the children of `node` (at `index`) the ray enters, by rank as
+    /// [`ChildTest::ranked_children`] gives them, returns the one to visit
+    /// next and queues the others; None when it enters none. The one
+    /// returned was entered within `t_cull` by the test just made.
+    fn descend(
+        stack: &mut UninitStack<Self::Entry>,
+        index: u32,
+        node: &WideNode,
+        ranks: u32,
+        entry: &[f32; 8],
+        flip: u32,
+    ) -> Option<ChildRef>;
+
+    /// The next queued child to visit, None when the walk is over.
+    fn resume(
+        stack: &mut UninitStack<Self::Entry>,
         bvh: &WideBvh,
-        ray: &TraversalRay,
         t_cull: f32,
-        visit: impl Visit,
-        slots: &mut [MaybeUninit<Self::Entry>],
-        test: impl ChildTest,
-    );
+        flip: u32,
+    ) -> Option<ChildRef>;
 }
 
 /// Runs walk `W` on a stack kept on the call stack for the usual depths,
@@ -182,7 +200,7 @@ fn walk_with_test<W: Walk>(
             // SAFETY: `detected` proves that the CPU has AVX2.
             unsafe { walk_avx2::<W>(bvh, ray, t_cull, visit, slots, Avx2Test(detected)) }
         }
-        _ => W::walk(bvh, ray, t_cull, visit, slots, PortableTest(ray.lanes())),
+        _ => walk::<W>(bvh, ray, t_cull, visit, slots, PortableTest(ray.lanes())),
     }
 }
 
@@ -199,7 +217,43 @@ fn walk_avx2<W: Walk>(
     slots: &mut [MaybeUninit<W::Entry>],
     test: Avx2Test,
 ) {
-    W::walk(bvh, ray, t_cull, visit, slots, test);
+    walk::<W>(bvh, ray, t_cull, visit, slots, test);
+}
+
+/// The walk itself, in `W`'s order, with `test` as the node test. The
+/// child visited next is kept in hand rather than queued and taken back
+/// at once: where a node lets one child through (most nodes, for most
+/// rays) the stack is not touched at all.
+#[inline(always)]
+fn walk<W: Walk>(
+    bvh: &WideBvh,
+    ray: &TraversalRay,
+    mut t_cull: f32,
+    mut visit: impl Visit,
+    slots: &mut [MaybeUninit<W::Entry>],
+    test: impl ChildTest,
+) {
+    let mut stack = UninitStack::new(slots);
+    let flip = W::flip(ray);
+    let mut child = ChildRef::ROOT;
+    loop {
+        if child.prim_count > 0 {
+            if !visit_leaf(child, &mut visit, &mut t_cull) {
+                return;
+            }
+        } else {
+            let node = &bvh.nodes[child.index as usize];
+            let (ranks, entry) = test.ranked_children(ray, node, t_cull, flip);
+            if let Some(next) = W::descend(&mut stack, child.index, node, ranks, &entry, flip) {
+                child = next;
+                continue;
+            }
+        }
+        match W::resume(&mut stack, bvh, t_cull, flip) {
+            Some(next) => child = next,
+            None => return,
+        }
+    }
 }
 
 /// Visits the slots of a leaf in order until `visit` says stop; returns

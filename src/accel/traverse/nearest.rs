@@ -2,13 +2,10 @@
 //! with its `t`, so that those beyond a culling distance lowered meanwhile
 //! are skipped when popped.
 
-use std::mem::MaybeUninit;
-
 use super::super::node_test::BINARY_SCALE;
 use super::super::wide::{ChildRef, WideBvh, WideNode};
-use super::node_test_path::ChildTest;
 use super::stack::UninitStack;
-use super::{visit_leaf, TraversalRay, Visit, Walk};
+use super::{TraversalRay, Walk};
 
 /// [`Order::Nearest`](super::Order::Nearest).
 pub struct NearestFirst;
@@ -29,44 +26,38 @@ impl Walk for NearestFirst {
         7 * depth + 1
     }
 
-    /// The child visited next is kept in hand rather than pushed and
-    /// popped at once: where a node lets one child through (most nodes,
-    /// for most rays) the stack is not touched at all.
+    /// Ranked by slot: `descend` sorts by entry `t`.
     #[inline(always)]
-    fn walk(
-        bvh: &WideBvh,
-        ray: &TraversalRay,
-        mut t_cull: f32,
-        mut visit: impl Visit,
-        slots: &mut [MaybeUninit<Entry>],
-        test: impl ChildTest,
-    ) {
-        let mut stack = UninitStack::new(slots);
-        let mut child = ChildRef::ROOT;
+    fn flip(_: &TraversalRay) -> u32 {
+        0
+    }
+
+    #[inline(always)]
+    fn descend(
+        stack: &mut UninitStack<Entry>,
+        _: u32,
+        node: &WideNode,
+        slots: u32,
+        entry: &[f32; 8],
+        _: u32,
+    ) -> Option<ChildRef> {
+        descend_nearest_first(stack, node, slots, entry)
+    }
+
+    /// The next child on the stack that still entered within `t_cull`.
+    #[inline(always)]
+    fn resume(
+        stack: &mut UninitStack<Entry>,
+        _: &WideBvh,
+        t_cull: f32,
+        _: u32,
+    ) -> Option<ChildRef> {
         loop {
-            if child.prim_count > 0 {
-                if !visit_leaf(child, &mut visit, &mut t_cull) {
-                    return;
-                }
-            } else {
-                let node = &bvh.nodes[child.index as usize];
-                // Ranked by slot (no flip); `descend` sorts by entry `t`.
-                let (slots, entry) = test.ranked_children(ray, node, t_cull, 0);
-                if let Some(next) = descend(&mut stack, node, slots, &entry) {
-                    child = next;
-                    continue;
-                }
+            let Entry { child, t } = stack.pop()?;
+            if t > t_cull * BINARY_SCALE {
+                continue;
             }
-            // The next child on the stack still entered within `t_cull`.
-            child = loop {
-                let Some(Entry { child, t }) = stack.pop() else {
-                    return;
-                };
-                if t > t_cull * BINARY_SCALE {
-                    continue;
-                }
-                break child;
-            };
+            return Some(child);
         }
     }
 }
@@ -77,7 +68,7 @@ impl Walk for NearestFirst {
 /// The one returned was entered within `t_cull` by the test just made, so
 /// it needs no check.
 #[inline(always)]
-fn descend(
+fn descend_nearest_first(
     stack: &mut UninitStack<Entry>,
     node: &WideNode,
     slots: u32,

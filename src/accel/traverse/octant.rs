@@ -5,12 +5,9 @@
 //! children on average and, stopping at its first hit, popped a third of
 //! one.
 
-use std::mem::MaybeUninit;
-
-use super::super::wide::{ChildRef, WideBvh};
-use super::node_test_path::ChildTest;
+use super::super::wide::{ChildRef, WideBvh, WideNode};
 use super::stack::UninitStack;
-use super::{visit_leaf, TraversalRay, Visit, Walk};
+use super::{TraversalRay, Walk};
 
 /// [`Order::Octant`](super::Order::Octant).
 pub struct OctantOrder;
@@ -32,51 +29,52 @@ impl Walk for OctantOrder {
         depth
     }
 
-    /// The same visits in the same order as pushing every child, highest
-    /// rank first, and popping them one by one.
+    /// Ranked `slot ^ octant`, children come front to back, as obvhs
+    /// placed them in their slots for the ray's octant.
     #[inline(always)]
-    fn walk(
-        bvh: &WideBvh,
-        ray: &TraversalRay,
-        mut t_cull: f32,
-        mut visit: impl Visit,
-        slots: &mut [MaybeUninit<Group>],
-        test: impl ChildTest,
-    ) {
-        let mut stack = UninitStack::new(slots);
-        // Ranked `slot ^ octant`, children come front to back, as obvhs
-        // placed them in their slots for the ray's octant.
-        let flip = ray.octant();
-        let mut child = ChildRef::ROOT;
-        loop {
-            if child.prim_count > 0 {
-                if !visit_leaf(child, &mut visit, &mut t_cull) {
-                    return;
-                }
-            } else {
-                let node = &bvh.nodes[child.index as usize];
-                let (ranks, _) = test.ranked_children(ray, node, t_cull, flip);
-                if ranks != 0 {
-                    let rest = ranks & (ranks - 1);
-                    if rest != 0 {
-                        stack.push(Group {
-                            node: child.index,
-                            ranks: rest,
-                        });
-                    }
-                    child = node.child_ref((ranks.trailing_zeros() ^ flip) as usize);
-                    continue;
-                }
-            }
-            let Some(group) = stack.top_mut() else {
-                return;
-            };
-            let (node, rank) = (group.node, group.ranks.trailing_zeros());
-            group.ranks &= group.ranks - 1;
-            if group.ranks == 0 {
-                stack.pop();
-            }
-            child = bvh.nodes[node as usize].child_ref((rank ^ flip) as usize);
+    fn flip(ray: &TraversalRay) -> u32 {
+        ray.octant()
+    }
+
+    /// The lowest rank is visited next; the others wait as one group.
+    #[inline(always)]
+    fn descend(
+        stack: &mut UninitStack<Group>,
+        index: u32,
+        node: &WideNode,
+        ranks: u32,
+        _: &[f32; 8],
+        flip: u32,
+    ) -> Option<ChildRef> {
+        if ranks == 0 {
+            return None;
         }
+        let rest = ranks & (ranks - 1);
+        if rest != 0 {
+            stack.push(Group {
+                node: index,
+                ranks: rest,
+            });
+        }
+        Some(node.child_ref((ranks.trailing_zeros() ^ flip) as usize))
+    }
+
+    /// The lowest rank of the group on top, which leaves the stack with
+    /// its last rank: the same visits in the same order as pushing every
+    /// child, highest rank first, and popping them one by one.
+    #[inline(always)]
+    fn resume(
+        stack: &mut UninitStack<Group>,
+        bvh: &WideBvh,
+        _: f32,
+        flip: u32,
+    ) -> Option<ChildRef> {
+        let group = stack.top_mut()?;
+        let (node, rank) = (group.node, group.ranks.trailing_zeros());
+        group.ranks &= group.ranks - 1;
+        if group.ranks == 0 {
+            stack.pop();
+        }
+        Some(bvh.nodes[node as usize].child_ref((rank ^ flip) as usize))
     }
 }
