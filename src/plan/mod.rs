@@ -2,7 +2,8 @@
 //! scene, the settings and the frames the run plans over, it says which
 //! effects those frames call for, so that later stages simulate nothing
 //! else. Per light a shadow class ([`Shadows`]: `none`, `unshadowed`,
-//! `hard`, `soft`), per object whether it moves within the planned frames,
+//! `hard`, `soft`), per object whether the playing clips move it at all
+//! (not only within the planned frames: see [`objects`]),
 //! per material whether it spawns secondary rays where the camera sees it,
 //! and the frames that change nothing.
 //!
@@ -105,8 +106,7 @@ pub struct Plan {
     #[serde(serialize_with = "report::numbers")]
     pub copied_frames: Vec<u32>,
     pub work: WorkEstimate,
-    /// Per scene node, whether its object may move within the planned
-    /// frames.
+    /// Per scene node, whether its object may move or deform.
     #[serde(skip)]
     dynamic_nodes: Vec<bool>,
 }
@@ -139,7 +139,7 @@ impl Plan {
             placed: &placed,
         };
 
-        let objects = objects::plan(scene, &planned);
+        let objects = objects::plan(scene, clips, &planned);
         let views = view::views(scene, &planned, settings);
         let materials = materials::plan(scene, &planned, &views);
         let lights = lights::plan(scene, &planned, &views);
@@ -171,8 +171,9 @@ impl Plan {
         SceneBounds::of(scene, &Pose::rest(scene)).map_or(DVec3::ZERO, |b| b.centre())
     }
 
-    /// Per scene node, whether its object may move or deform within the
-    /// planned frames: everything else goes into the static structures
+    /// Per scene node, whether the playing clips may move or deform its
+    /// object (in any frame, planned or not): everything else goes into
+    /// the static structures
     /// (the world's static BVH, the light mesh's static layer and its disk
     /// cache).
     pub fn dynamic_nodes(&self) -> &[bool] {

@@ -83,9 +83,12 @@ pub fn text(plan: &Plan) -> String {
     );
     for object in dynamic {
         let name = object.name.as_deref().unwrap_or("(unnamed)");
-        let moves = match object.moves_in.is_empty() {
-            true => "deforms (skin or morph targets)".to_owned(),
-            false => format!("moves in {}", object.moves_in.join(",")),
+        let moves = if !object.moves_in.is_empty() {
+            format!("moves in {}", object.moves_in.join(","))
+        } else if object.deforms {
+            "deforms (skin or morph targets)".to_owned()
+        } else {
+            "animated, still in the planned frames".to_owned()
         };
         let _ = writeln!(out, "  node {:>4} {:<20} {moves}", object.node, name);
     }

@@ -138,11 +138,18 @@ pub fn default_weights(scene: &SceneDesc) -> Vec<Vec<f32>> {
 /// above it, is animated, or when its own mesh deforms. Everything else is
 /// static and goes into the structure built once per sequence.
 pub fn dynamic_nodes(scene: &SceneDesc) -> Vec<bool> {
+    dynamic_nodes_where(scene, |node| scene.nodes[node].animated)
+}
+
+/// [`dynamic_nodes`] with `animated` saying which nodes a channel moves:
+/// a node is dynamic when it, or any node above it, is `animated`, or
+/// when its own mesh deforms.
+pub fn dynamic_nodes_where(scene: &SceneDesc, animated: impl Fn(usize) -> bool) -> Vec<bool> {
     let mut dynamic = vec![false; scene.nodes.len()];
     let mut stack: Vec<(usize, bool)> = scene.roots.iter().map(|&root| (root, false)).collect();
     while let Some((index, parent_moves)) = stack.pop() {
         let node = &scene.nodes[index];
-        let moves = parent_moves || node.animated;
+        let moves = parent_moves || animated(index);
         dynamic[index] = moves || node.deforms;
         stack.extend(node.children.iter().map(|&child| (child, moves)));
     }
