@@ -26,7 +26,7 @@ use crate::scene::pose::{dynamic_nodes, Pose};
 use crate::scene::SceneDesc;
 use crate::schedule::{FrameDelta, FrameSet, Timeline};
 use crate::settings::{Method, Settings};
-use crate::stats::{FrameStats, RunStats};
+use crate::stats::{FrameStats, RunStats, StaticSet};
 
 /// Why a run stopped. `is_bad_input` separates the user's mistakes (exit
 /// code 2) from failures of the machine (exit code 1).
@@ -112,6 +112,8 @@ pub struct Sequence {
     /// The light mesh, made on the first LMM frame and kept so that later
     /// frames reuse its masks, with its disk cache.
     light_mesh: PersistentLightMesh,
+    /// The objects in the static structures and their hash.
+    static_set: StaticSet,
     /// Which animation clips play.
     clips: ClipSelection,
     /// The previous frame's placement, to tell what changed.
@@ -186,9 +188,17 @@ impl Sequence {
             file: scene_file.clone(),
             source,
         })?;
+        let light_mesh = PersistentLightMesh::new(&scene, &placed);
+        let dynamic_objects = placed.objects.iter().filter(|o| o.dynamic).count() as u64;
+        let static_set = StaticSet {
+            static_objects: placed.objects.len() as u64 - dynamic_objects,
+            dynamic_objects,
+            hash: format!("{:032x}", light_mesh.static_geometry()),
+        };
         Ok(Sequence {
             world: placed.build_world(&scene),
-            light_mesh: PersistentLightMesh::new(&scene, &placed),
+            light_mesh,
+            static_set,
             scene,
             scene_file,
             anchor,
@@ -201,6 +211,12 @@ impl Sequence {
             last_frame: None,
             still: false,
         })
+    }
+
+    /// The objects in the static structures, and the hash that keys the
+    /// disk cache by them.
+    pub fn static_set(&self) -> &StaticSet {
+        &self.static_set
     }
 
     /// The plan the sequence follows, if it has one.
@@ -568,6 +584,7 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
         threads: backend.threads(),
         method: settings.method.to_string(),
         adapter: backend.adapter(),
+        static_set: sequence.static_set().clone(),
         ..RunStats::default()
     };
     let timeline = Timeline { fps: settings.fps };

@@ -146,4 +146,19 @@ pub struct RunStats {
     /// driver); absent on the CPU.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub adapter: Option<String>,
+    /// Which objects the run traced as static.
+    pub static_set: StaticSet,
+}
+
+/// The objects a run keeps in its static structures, and the hash of
+/// their triangles and placements that keys the light-mesh disk cache.
+/// Every run of a shot (a frame alone, a farm chunk, the whole shot)
+/// must report the same: objects traced the other way round would render
+/// other bits, and would not share the cache.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct StaticSet {
+    pub static_objects: u64,
+    pub dynamic_objects: u64,
+    /// 32 hex digits.
+    pub hash: String,
 }

@@ -76,7 +76,7 @@ fn three_chunks_at_once_write_one_runs_frames_and_one_cache() {
         .env("LMANIM", env!("CARGO_BIN_EXE_lmanim"))
         .current_dir(dir.path()));
 
-    common::cli::courtyard_in_one_run(&settings, &dir.path().join("one"));
+    common::cli::courtyard_in_one_run("0-5", &settings, &dir.path().join("one"));
     for frame in 0..6 {
         let name = format!("frame.{frame:04}.exr");
         let farm = read_exr(&dir.path().join("farm").join(&name)).expect("the farm wrote it");

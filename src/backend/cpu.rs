@@ -370,7 +370,9 @@ impl MeshStage<'_> {
 
         if !self.point_to_node_tests {
             let start = Instant::now();
-            lightmesh.nodes_probed += mesh.settle_enclosure(&demand, job.world);
+            let enclosure = mesh.settle_enclosure(&demand, job.world);
+            lightmesh.nodes_probed += enclosure.probed;
+            lightmesh.enclosure_reused += enclosure.reused;
             stats.add_stage_time("enclosure", start.elapsed().as_secs_f64());
         }
 

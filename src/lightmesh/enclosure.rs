@@ -111,26 +111,41 @@ pub fn leave_out_enclosed(nodes: &mut Vec<IVec3>, bricks: &mut BrickCache, light
     });
 }
 
+/// What the enclosure stage did in a frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EnclosureWork {
+    /// Nodes probed: their flag was settled now.
+    pub probed: u64,
+    /// Nodes whose flag an earlier frame settled, read as it left it
+    /// (flags depend on the static geometry alone, so none is dropped).
+    pub reused: u64,
+}
+
 impl LightMesh {
     /// Settles the enclosure flag of every node `demand` names that is
     /// blocked from some light it is asked for and has no flag yet, in
-    /// parallel over bricks; returns how many nodes were probed. Runs
-    /// after the fill, which has made every needed bit valid.
-    pub fn settle_enclosure(&mut self, demand: &Demand, world: &World) -> u64 {
+    /// parallel over bricks. Runs after the fill, which has made every
+    /// needed bit valid.
+    pub fn settle_enclosure(&mut self, demand: &Demand, world: &World) -> EnclosureWork {
         let reach = REACH_IN_RADII * self.radius();
         let words = demand.words;
-        let settled: Vec<(IVec3, BrickEnclosure)> = demand
+        let settled: Vec<(IVec3, BrickEnclosure, u64)> = demand
             .bricks
             .par_iter()
             .filter_map(|brick| {
                 let known = self.masks.enclosure(brick.brick).known;
                 let bits = self.masks.brick(brick.brick)?;
                 let mut settled = BrickEnclosure::default();
+                let mut reused = 0;
                 for slot in 0..BRICK_NODES {
                     let bit = 1u64 << (slot % 64);
                     let mask = self.masks.slot_mask(bits, slot);
                     let needed = &brick.needed[slot * words..(slot + 1) * words];
-                    if !blocks_some(&mask, needed) || known[slot / 64] & bit != 0 {
+                    if !blocks_some(&mask, needed) {
+                        continue;
+                    }
+                    if known[slot / 64] & bit != 0 {
+                        reused += 1;
                         continue;
                     }
                     settled.known[slot / 64] |= bit;
@@ -139,23 +154,19 @@ impl LightMesh {
                         settled.enclosed[slot / 64] |= bit;
                     }
                 }
-                settled
-                    .known
-                    .iter()
-                    .any(|&word| word != 0)
-                    .then_some((brick.brick, settled))
+                Some((brick.brick, settled, reused))
             })
             .collect();
-        let mut probed = 0;
-        for (brick, flags) in &settled {
-            probed += flags
-                .known
-                .iter()
-                .map(|w| w.count_ones() as u64)
-                .sum::<u64>();
-            self.masks.merge_enclosure(*brick, flags);
+        let mut work = EnclosureWork::default();
+        for (brick, flags, reused) in &settled {
+            work.reused += reused;
+            let probed: u64 = flags.known.iter().map(|w| w.count_ones() as u64).sum();
+            if probed > 0 {
+                work.probed += probed;
+                self.masks.merge_enclosure(*brick, flags);
+            }
         }
-        probed
+        work
     }
 }
 

@@ -127,6 +127,10 @@ pub struct LightMeshStats {
     /// Nodes probed for lying inside closed geometry this frame (LMM1
     /// only; each node once per run).
     pub nodes_probed: u64,
+    /// Enclosure flags LMM1 read that an earlier frame settled: the only
+    /// thing derived from the masks that frames keep (agreement summaries
+    /// and level answers are made anew in every frame).
+    pub enclosure_reused: u64,
     /// Static bits imported from the disk cache this frame (only the
     /// frame that made the light mesh loads any).
     pub bits_loaded: u64,

@@ -74,6 +74,11 @@ impl PersistentLightMesh {
         self.cache_dir = dir;
     }
 
+    /// The content hash of the static geometry (the disk cache's key).
+    pub fn static_geometry(&self) -> u128 {
+        self.static_geometry
+    }
+
     /// The light mesh, once a frame has made it.
     pub fn get(&self) -> Option<&LightMesh> {
         self.mesh.as_ref()

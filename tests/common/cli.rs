@@ -26,16 +26,16 @@ pub fn assert_bad_input(output: &Output, needle: &str) {
     assert!(lines[0].contains(needle), "'{needle}' in {stderr}");
 }
 
-/// Renders the courtyard's frames 0–5 by LMM1 in one run, without the
+/// Renders the courtyard's `frames` (`--frames` text) by LMM1 in one run, without the
 /// disk cache, with `settings`, to `dir`/frame.####.exr: what a farm's
 /// chunks of the same frames must write.
-pub fn courtyard_in_one_run(settings: &std::path::Path, dir: &std::path::Path) {
+pub fn courtyard_in_one_run(frames: &str, settings: &std::path::Path, dir: &std::path::Path) {
     let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("animations/courtyard.gltf");
     let out = dir.join("frame.####.exr");
     let run = lmanim(&[
         scene.to_str().expect("UTF-8 path"),
         "--frames",
-        "0-5",
+        frames,
         "--method",
         "lmm1",
         "--no-cache",

@@ -197,7 +197,9 @@ impl<'m> LightMeshShading<'m> {
 
         if !p2n {
             let start = Instant::now();
-            self.work.nodes_probed += self.mesh.settle_enclosure(&demand, job.world);
+            let enclosure = self.mesh.settle_enclosure(&demand, job.world);
+            self.work.nodes_probed += enclosure.probed;
+            self.work.enclosure_reused += enclosure.reused;
             stats.add_stage_time("enclosure", start.elapsed().as_secs_f64());
         }
 
