@@ -166,7 +166,7 @@ struct RenderArgs {
     /// Print the effect plan (as `lmanim plan` does) before rendering.
     #[arg(long)]
     explain: bool,
-    /// Which hardware renders: `cpu` (default) or `gpu` (wgpu compute).
+    /// Which hardware renders: `cpu` or `gpu` (wgpu compute).
     #[arg(long, value_enum)]
     backend: Option<BackendKind>,
     /// Image width in pixels.
