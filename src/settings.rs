@@ -464,6 +464,9 @@ impl Settings {
                 "sheet_thumb_width is {width}; it must be 1 to {MAX_DIMENSION}"
             ));
         }
+        if self.skip_existing && self.contact_sheet.is_some() && !self.exr {
+            return Err("skip_existing puts skipped frames on the contact sheet from their EXR files, and exr is false (--preview writes PNG only): leave out the contact sheet or skip_existing".into());
+        }
         if !self.exr && !self.aovs.is_empty() {
             return Err("aovs go into the EXR frames, and exr is false".into());
         }

@@ -411,6 +411,16 @@ fn skip_existing_renders_only_missing_and_damaged_frames() {
         "skipped frame 5's cell holds its picture"
     );
 
+    // A PNG-only run has no EXR to put a skipped frame on the sheet from.
+    let preview = [
+        scene.as_str(),
+        "--preview",
+        "--skip-existing",
+        "--contact-sheet",
+        "x.png",
+    ];
+    assert_bad_input(&lmanim(&preview), "skip_existing puts skipped frames");
+
     // Nothing missing: nothing rendered.
     let again = render(&resumed, "0..8", &["--skip-existing"]);
     assert!(
