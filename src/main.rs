@@ -461,9 +461,12 @@ fn run(cli: &RenderArgs) -> Result<(), Failure> {
         eprint!("{}", plan::report::text(&planned(&job)?));
     }
     let progress = progress_bar(cli.quiet, frames.len() as u64);
+    // Frames left out by --skip-existing, for the bar's message.
+    let mut skipped = 0;
     let stats = sequence::run(&job, |done| {
         if done.skipped {
-            progress.set_message(format!("skipped {}", done.path.display()));
+            skipped += 1;
+            progress.set_message(format!("{skipped} skipped (on disk)"));
             progress.inc(1);
             return;
         }
@@ -491,7 +494,11 @@ fn run(cli: &RenderArgs) -> Result<(), Failure> {
                 )
             });
         }
-        progress.set_message(done.path.display().to_string());
+        let written = done.path.display();
+        progress.set_message(match skipped {
+            0 => written.to_string(),
+            _ => format!("{written}, {skipped} skipped (on disk)"),
+        });
         progress.inc(1);
     })
     .map_err(|error| Failure {
