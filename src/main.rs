@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Context;
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use lmanim::anim::inspect::inspect;
@@ -30,6 +30,9 @@ use lmanim::study::{self, StudyOptions};
 
 /// Render a glTF scene's animation to an EXR image sequence, with soft
 /// shadows from point lights by the Light Meshes Method.
+///
+/// Flags override the settings file (SCENE.ron, or --settings); a
+/// default shown is the value when neither sets one.
 #[derive(Debug, Parser)]
 #[command(
     name = "lmanim",
@@ -79,19 +82,24 @@ struct StudyArgs {
     /// The frame to study (at the settings file's fps).
     #[arg(long, default_value_t = 0)]
     frame: u32,
-    /// Image width in pixels [default: the settings file's, or 640].
+    /// Image width in pixels (the scene's settings file's, if it has one).
     #[arg(long)]
     width: Option<u32>,
-    /// Image height in pixels [default: the settings file's, or 360].
+    /// Image height in pixels (the scene's settings file's, if it has one).
     #[arg(long)]
     height: Option<u32>,
     /// Measure against this EXR (e.g. another renderer's) instead of
     /// rendering a reference.
     #[arg(long, value_name = "REF.exr")]
     reference: Option<PathBuf>,
-    /// Leave out the pixels where this EXR is above 0.
+    /// Leave out the pixels where this EXR is above 0: its alpha, else its
+    /// Y, else its largest colour channel.
     #[arg(long, value_name = "MASK.exr", requires = "reference")]
     reference_mask: Option<PathBuf>,
+    /// Read the reference from this layer of REF.exr (a part's name or a
+    /// channel prefix such as `ViewLayer.Combined`) instead of its beauty.
+    #[arg(long, value_name = "NAME", requires = "reference")]
+    reference_layer: Option<String>,
     /// Samples per pixel of the rendered reference (method area).
     #[arg(long, default_value_t = study::DEFAULT_REFERENCE_SPP, conflicts_with = "reference")]
     reference_spp: u32,
@@ -127,7 +135,8 @@ struct InspectArgs {
     /// Frames to sample, as for rendering (`A..B`, `A..=B`, `N`, `1-30,47`).
     #[arg(long)]
     frames: Option<String>,
-    /// Frames per second for --frames [default: the scene's settings file's, or 24].
+    /// Frames per second for --frames (the scene's settings file's, if it
+    /// has one).
     #[arg(long)]
     fps: Option<f64>,
 }
@@ -143,12 +152,11 @@ struct RenderArgs {
     /// Frames per second of the timeline (frame f is at time f / fps).
     #[arg(long)]
     fps: Option<f64>,
-    /// Output pattern; a run of `#` becomes the zero-padded frame number.
-    /// [default: renders/<scene>/frame.####.exr]
+    /// Output pattern; a run of `#` becomes the zero-padded frame number
+    /// (by default renders/<scene>/frame.####.exr).
     #[arg(long)]
     out: Option<String>,
-    /// Rendering method [default: auto, each light as the effect plan
-    /// says].
+    /// Rendering method (`auto`: each light as the effect plan says).
     #[arg(long, value_enum)]
     method: Option<Method>,
     /// Plan over these frames of the shot instead of the rendered ones
@@ -158,7 +166,7 @@ struct RenderArgs {
     /// Print the effect plan (as `lmanim plan` does) before rendering.
     #[arg(long)]
     explain: bool,
-    /// Which hardware renders: `cpu` (default) or `gpu` (wgpu compute).
+    /// Which hardware renders: `cpu` or `gpu` (wgpu compute).
     #[arg(long, value_enum)]
     backend: Option<BackendKind>,
     /// Image width in pixels.
@@ -183,41 +191,51 @@ struct RenderArgs {
     /// Worker threads (default: one per core).
     #[arg(long)]
     threads: Option<usize>,
-    /// Light-mesh lattice step in metres [default: from the lamp radii].
+    /// Light-mesh lattice step in metres (by default from the lamp radii).
     #[arg(long = "h", value_name = "METRES", allow_negative_numbers = true)]
     h: Option<f32>,
     /// Light-mesh interpolation radius in lattice steps (the paper's kI).
     #[arg(long, value_name = "K", allow_negative_numbers = true)]
     ki: Option<f32>,
-    /// How formula (2) weighs the nodes: box (the paper) or smooth
-    /// [default: box].
+    /// How formula (2) weighs the nodes: box (the paper) or smooth.
     #[arg(long, value_enum)]
     kernel: Option<Kernel>,
     /// How wide each light's set is where its nodes disagree: fixed (kI·h,
-    /// the paper) or blocker (from the lamp's radius and the blocker's
-    /// distance) [default: blocker].
+    /// the paper), blocker (from the lamp's radius and the blocker's
+    /// distance) or wide (blocker, also where only a wider set of nodes
+    /// sees the penumbra).
     #[arg(long, value_enum)]
     penumbra: Option<Penumbra>,
     /// Also write a tone-mapped sRGB PNG preview beside each frame.
     #[arg(long)]
     png: bool,
     /// Exposure of the PNG previews in stops: +1 doubles the radiance
-    /// before tone mapping (the EXR frames are not scaled) [default: 0].
+    /// before tone mapping (the EXR frames are not scaled).
     #[arg(long, value_name = "EV", allow_negative_numbers = true)]
     exposure: Option<f32>,
+    /// Render only the frames whose files (the EXR, and the PNG with
+    /// --png) are missing or do not read back whole at the run's size: a
+    /// stopped shot resumes where it stopped.
+    #[arg(long)]
+    skip_existing: bool,
     /// Write a contact sheet of the run's frames, labelled with their
     /// numbers, to this PNG at the end of the run.
     #[arg(long, value_name = "FILE.png")]
     contact_sheet: Option<String>,
-    /// Thumbnails per row of the contact sheet [default: 6].
+    /// Thumbnails per row of the contact sheet.
     #[arg(long, value_name = "N")]
     sheet_columns: Option<u32>,
-    /// Put every K-th frame of the run on the contact sheet [default: 1].
+    /// Put every K-th frame of the run on the contact sheet.
     #[arg(long, value_name = "K")]
     sheet_every: Option<u32>,
+    /// Width of the contact sheet's thumbnails in pixels (by default 256,
+    /// or the frame's width where that is smaller); the sheet grows with
+    /// the frames.
+    #[arg(long, value_name = "PIXELS")]
+    sheet_thumb_width: Option<u32>,
     /// The frames the contact sheet is over (e.g. the whole shot, `0..240`);
     /// those this run does not render are read back from their EXR files
-    /// [default: the run's frames].
+    /// (by default the run's frames).
     #[arg(long, value_name = "RANGE")]
     sheet_frames: Option<String>,
     /// Write these layers into each EXR beside the beauty, comma-separated:
@@ -232,7 +250,7 @@ struct RenderArgs {
     #[arg(long)]
     exr_float: bool,
     /// Keep the light mesh's static masks in this directory, shared by
-    /// runs of the same scene and lattice [default: cache].
+    /// runs of the same scene and lattice.
     #[arg(long, value_name = "DIR", conflicts_with = "no_cache")]
     cache: Option<String>,
     /// Neither read nor write the light-mesh disk cache.
@@ -272,7 +290,7 @@ impl From<anyhow::Error> for Failure {
 
 fn main() -> ExitCode {
     quiet_headless_vulkan();
-    let cli = Cli::parse();
+    let cli = Cli::from_arg_matches(&command().get_matches()).unwrap_or_else(|error| error.exit());
     let outcome = match (&cli.command, &cli.render) {
         (Some(Command::Inspect(args)), _) => {
             init_logging(false);
@@ -303,6 +321,70 @@ fn main() -> ExitCode {
             eprintln!("lmanim: error: {}", one_line(&failure.error));
             ExitCode::from(if failure.bad_input { 2 } else { 1 })
         }
+    }
+}
+
+/// The command line, each flag that overrides a setting documented with
+/// `Settings::default()`'s value. Clap can give such a flag no default
+/// of its own (it would override the settings file), so its
+/// `[default: …]` is added to its help here, from the code, where it
+/// cannot drift from the value.
+fn command() -> clap::Command {
+    let defaults = setting_defaults();
+    let documented = |command: clap::Command| {
+        defaults.iter().fold(command, |command, (id, value)| {
+            let has = command.get_arguments().any(|arg| arg.get_id() == id);
+            match has {
+                true => command.mut_arg(*id, |arg| with_default(arg, value)),
+                false => command,
+            }
+        })
+    };
+    let mut command = documented(Cli::command());
+    for name in ["warm", "plan", "study", "inspect"] {
+        command = command.mut_subcommand(name, documented);
+    }
+    command
+}
+
+/// Each flag (by its argument id) that overrides a setting with a value
+/// by default, and that value as the flag takes it.
+fn setting_defaults() -> Vec<(&'static str, String)> {
+    fn name(value: impl ValueEnum) -> String {
+        value
+            .to_possible_value()
+            .map_or_else(String::new, |value| value.get_name().to_owned())
+    }
+    let settings = Settings::default();
+    let mut defaults = vec![
+        ("fps", settings.fps.to_string()),
+        ("method", name(settings.method)),
+        ("backend", name(settings.backend)),
+        ("width", settings.width.to_string()),
+        ("height", settings.height.to_string()),
+        ("spp", settings.spp.to_string()),
+        ("ki", settings.lightmesh.ki.to_string()),
+        ("kernel", name(settings.lightmesh.kernel)),
+        ("penumbra", name(settings.lightmesh.penumbra)),
+        ("exposure", settings.exposure.to_string()),
+        ("sheet_columns", settings.sheet_columns.to_string()),
+        ("sheet_every", settings.sheet_every.to_string()),
+    ];
+    defaults.extend(settings.cache_dir.map(|dir| ("cache", dir)));
+    defaults
+}
+
+/// `arg` with `[default: value]` after its help, as clap writes its own.
+fn with_default(arg: clap::Arg, value: &str) -> clap::Arg {
+    let note = format!("[default: {value}]");
+    let help = arg
+        .get_help()
+        .map_or_else(|| note.clone(), |help| format!("{help} {note}"));
+    let long_help = arg.get_long_help().map(|help| format!("{help}\n\n{note}"));
+    let arg = arg.help(help);
+    match long_help {
+        Some(long_help) => arg.long_help(long_help),
+        None => arg,
     }
 }
 
@@ -379,7 +461,15 @@ fn run(cli: &RenderArgs) -> Result<(), Failure> {
         eprint!("{}", plan::report::text(&planned(&job)?));
     }
     let progress = progress_bar(cli.quiet, frames.len() as u64);
+    // Frames left out by --skip-existing, for the bar's message.
+    let mut skipped = 0;
     let stats = sequence::run(&job, |done| {
+        if done.skipped {
+            skipped += 1;
+            progress.set_message(format!("{skipped} skipped (on disk)"));
+            progress.inc(1);
+            return;
+        }
         if done.index == 0 && done.automatic_camera {
             progress.suspend(|| {
                 log::warn!(
@@ -404,7 +494,11 @@ fn run(cli: &RenderArgs) -> Result<(), Failure> {
                 )
             });
         }
-        progress.set_message(done.path.display().to_string());
+        let written = done.path.display();
+        progress.set_message(match skipped {
+            0 => written.to_string(),
+            _ => format!("{written}, {skipped} skipped (on disk)"),
+        });
         progress.inc(1);
     })
     .map_err(|error| Failure {
@@ -456,10 +550,12 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     settings.clip = flags.clip.clone().or(settings.clip);
     settings.out = flags.out.clone().or(settings.out);
     settings.png |= flags.png;
+    settings.skip_existing |= flags.skip_existing;
     settings.exposure = flags.exposure.unwrap_or(settings.exposure);
     settings.contact_sheet = flags.contact_sheet.clone().or(settings.contact_sheet);
     settings.sheet_columns = flags.sheet_columns.unwrap_or(settings.sheet_columns);
     settings.sheet_every = flags.sheet_every.unwrap_or(settings.sheet_every);
+    settings.sheet_thumb_width = flags.sheet_thumb_width.or(settings.sheet_thumb_width);
     settings.sheet_frames = flags.sheet_frames.clone().or(settings.sheet_frames);
     settings.plan_frames = flags.plan_frames.clone().or(settings.plan_frames);
     if let Some(list) = &flags.aovs {
@@ -595,6 +691,7 @@ fn run_study(args: &StudyArgs) -> Result<(), Failure> {
         height: args.height,
         reference: args.reference.clone(),
         reference_mask: args.reference_mask.clone(),
+        reference_layer: args.reference_layer.clone(),
         reference_spp: args.reference_spp,
         methods: args.methods.clone(),
         out: args.out.clone(),
@@ -675,8 +772,12 @@ fn summary(stats: &RunStats, pattern: &str) -> String {
         .iter()
         .map(|f| f.rays.primary + f.rays.shadow + f.rays.secondary)
         .sum();
+    let skipped = match stats.skipped.len() {
+        0 => String::new(),
+        count => format!("; skipped {count} frame(s) already on disk"),
+    };
     format!(
-        "rendered {} frame(s) with {} on {} thread(s) in {:.2} s ({:.3} s/frame, {:.2} Mrays/s) to {}",
+        "rendered {} frame(s) with {} on {} thread(s) in {:.2} s ({:.3} s/frame, {:.2} Mrays/s) to {}{skipped}",
         stats.frames.len(),
         stats.method,
         stats.threads,
@@ -685,4 +786,220 @@ fn summary(stats: &RunStats, pattern: &str) -> String {
         rays as f64 / stats.total_seconds.max(1e-9) / 1e6,
         pattern
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The setting each flag overrides, as a path into
+    /// `Settings::default()` serialised: found apart from
+    /// [`setting_defaults`], so a flag documented from the wrong field
+    /// shows.
+    const SETTING_OF_FLAG: [(&str, &str); 13] = [
+        ("--fps", "/fps"),
+        ("--method", "/method"),
+        ("--backend", "/backend"),
+        ("--width", "/width"),
+        ("--height", "/height"),
+        ("--spp", "/spp"),
+        ("--ki", "/lightmesh/ki"),
+        ("--kernel", "/lightmesh/kernel"),
+        ("--penumbra", "/lightmesh/penumbra"),
+        ("--exposure", "/exposure"),
+        ("--sheet-columns", "/sheet_columns"),
+        ("--sheet-every", "/sheet_every"),
+        ("--cache", "/cache_dir"),
+    ];
+
+    /// The `(flag, value)` of every `[default: value]` in `command`'s long
+    /// help, as a user reads it.
+    fn documented_defaults(command: &mut clap::Command) -> Vec<(String, String)> {
+        let help = command.render_long_help().to_string();
+        let mut flag = String::new();
+        let mut found = Vec::new();
+        for line in help.lines() {
+            let words: Vec<&str> = line.split_whitespace().collect();
+            let named = (words.iter().take(2)).find(|word| word.starts_with("--"));
+            // Flags start within 6 columns, their help further in.
+            let indent = line.len() - line.trim_start().len();
+            if indent <= 6 && words.first().is_some_and(|w| w.starts_with('-')) {
+                flag = named
+                    .map_or("", |word| word.trim_end_matches(','))
+                    .to_owned();
+            }
+            let mut rest = line;
+            while let Some(start) = rest.find("[default: ") {
+                let value = &rest[start + "[default: ".len()..];
+                let end = value.find(']').expect("a closed [default: …]");
+                found.push((flag.clone(), value[..end].to_owned()));
+                rest = &value[end..];
+            }
+        }
+        found
+    }
+
+    /// The value `settings` gives `flag`, as the flag would take it, if
+    /// the flag overrides a setting.
+    fn setting_value(settings: &Settings, flag: &str) -> Option<String> {
+        let (_, pointer) = SETTING_OF_FLAG.iter().find(|(name, _)| *name == flag)?;
+        let json = serde_json::to_value(settings).unwrap();
+        Some(match json.pointer(pointer).unwrap() {
+            serde_json::Value::String(text) => text.clone(),
+            serde_json::Value::Number(number) => number.as_f64().unwrap().to_string(),
+            other => panic!("{flag}: a default of {other}"),
+        })
+    }
+
+    /// Every documented default of every command that differs from
+    /// `settings` (for a flag overriding a setting) or from clap's own
+    /// default (for the others), and every flag overriding a setting
+    /// that documents none.
+    fn drift(settings: &Settings) -> Vec<String> {
+        let mut root = command();
+        let names: Vec<String> = (root.get_subcommands())
+            .map(|sub| sub.get_name().to_owned())
+            .collect();
+        let mut commands = vec![root.clone()];
+        commands.extend(
+            names
+                .iter()
+                .map(|name| root.find_subcommand_mut(name).unwrap().clone()),
+        );
+        let mut faults = Vec::new();
+        for mut command in commands {
+            let documented = documented_defaults(&mut command);
+            for (flag, value) in &documented {
+                let clap_own = (command.get_arguments())
+                    .find(|arg| {
+                        arg.get_long()
+                            .is_some_and(|long| format!("--{long}") == *flag)
+                    })
+                    .map(|arg| {
+                        let values: Vec<String> = (arg.get_default_values().iter())
+                            .map(|value| value.to_string_lossy().into_owned())
+                            .collect();
+                        values.join(",")
+                    });
+                let expected = setting_value(settings, flag).or(clap_own);
+                if expected.as_deref() != Some(value.as_str()) {
+                    faults.push(format!(
+                        "{} {flag}: documented {value}, is {expected:?}",
+                        command.get_name()
+                    ));
+                }
+            }
+            for arg in command.get_arguments() {
+                let flag = arg
+                    .get_long()
+                    .map(|long| format!("--{long}"))
+                    .unwrap_or_default();
+                let overrides = setting_value(settings, &flag).is_some();
+                if overrides && !documented.iter().any(|(name, _)| *name == flag) {
+                    faults.push(format!(
+                        "{} {flag}: no default documented",
+                        command.get_name()
+                    ));
+                }
+            }
+        }
+        faults
+    }
+
+    #[test]
+    fn every_documented_default_is_the_settings_default() {
+        assert_eq!(drift(&Settings::default()), Vec::<String>::new());
+        let mut help = command();
+        let penumbra = documented_defaults(&mut help);
+        assert!(
+            penumbra.contains(&("--penumbra".into(), "wide".into())),
+            "{penumbra:?}"
+        );
+    }
+
+    #[test]
+    fn a_default_changed_without_its_doc_is_drift() {
+        let mut changed = Settings::default();
+        changed.lightmesh.penumbra = Penumbra::Blocker;
+        changed.fps = 30.0;
+        let faults = drift(&changed);
+        assert!(
+            faults
+                .iter()
+                .any(|fault| fault.contains("--penumbra: documented wide")),
+            "{faults:?}"
+        );
+        assert!(
+            faults
+                .iter()
+                .any(|fault| fault.contains("--fps: documented 24")),
+            "{faults:?}"
+        );
+    }
+
+    /// The rows of the README's flag table ("Command line"): the flags of
+    /// the first cell, and the row.
+    fn readme_flag_rows() -> Vec<(Vec<String>, String)> {
+        let readme = include_str!("../README.md");
+        let section = &readme[readme
+            .find("\n## Command line")
+            .expect("a Command line section")..];
+        let section = &section[..section[1..]
+            .find("\n#")
+            .map_or(section.len(), |end| end + 1)];
+        (section.lines())
+            .filter(|line| line.starts_with("| `"))
+            .map(|row| {
+                let first = row.split('|').nth(1).unwrap_or("");
+                let flags = (first.split('`').skip(1).step_by(2))
+                    .map(str::to_owned)
+                    .collect();
+                (flags, row.to_owned())
+            })
+            .collect()
+    }
+
+    /// Whether `text` holds `value` as a word of its own after a
+    /// "default".
+    fn says_default(text: &str, value: &str) -> bool {
+        let Some(start) = text.find("default") else {
+            return false;
+        };
+        let text = &text[start..];
+        let word = |c: char| c.is_alphanumeric() || c == '.' || c == '_';
+        text.match_indices(value).any(|(at, _)| {
+            let before = text[..at].chars().next_back().is_none_or(|c| !word(c));
+            let after = text[at + value.len()..]
+                .chars()
+                .next()
+                .is_none_or(|c| !word(c));
+            before && after
+        })
+    }
+
+    #[test]
+    fn the_readme_flag_table_lists_the_flags_and_defaults_of_help() {
+        let rows = readme_flag_rows();
+        let mut in_readme: Vec<String> = rows.iter().flat_map(|(flags, _)| flags.clone()).collect();
+        in_readme.sort();
+        let root = command();
+        let mut in_help: Vec<String> = (root.get_arguments())
+            .filter(|arg| !["help", "version"].contains(&arg.get_id().as_str()))
+            .map(|arg| match arg.get_long() {
+                Some(long) => format!("--{long}"),
+                None => arg.get_id().as_str().to_uppercase(),
+            })
+            .collect();
+        in_help.sort();
+        assert_eq!(in_readme, in_help, "README's flag table against --help");
+        for (flag, value) in documented_defaults(&mut command()) {
+            let (_, row) = (rows.iter())
+                .find(|(flags, _)| flags.contains(&flag))
+                .expect("every flag has a row");
+            assert!(
+                says_default(row, &value),
+                "the README's {flag} does not say default {value}: {row}"
+            );
+        }
+    }
 }

@@ -16,7 +16,8 @@ use crate::import::{self, ImportError};
 use crate::lightmesh::persistent::PersistentLightMesh;
 use crate::lightmesh::{LightMesh, LightMeshError};
 use crate::output::{
-    self, BackgroundWriter, FrameFiles, FramePattern, OutputError, RenderedFrame, ShotSheet,
+    self, BackgroundWriter, ContactSheet, FrameFiles, FramePattern, OutputError, RenderedFrame,
+    ShotSheet,
 };
 use crate::plan::Plan;
 use crate::render::frame::{CameraChoice, FrameScene, PlaceError, SceneBounds};
@@ -47,6 +48,8 @@ pub enum RunError {
     PatternWithoutPlaceholder(String),
     #[error("sheet_frames: {0}")]
     SheetFrames(String),
+    #[error("{path}: {fault}")]
+    SheetSize { path: String, fault: String },
     #[error(transparent)]
     Output(#[from] OutputError),
     #[error(transparent)]
@@ -73,6 +76,7 @@ impl RunError {
                 | RunError::Clip { .. }
                 | RunError::PatternWithoutPlaceholder(_)
                 | RunError::SheetFrames(_)
+                | RunError::SheetSize { .. }
                 | RunError::WarmWithoutLightMesh(_)
                 | RunError::PlanFramesMissFrame { .. }
                 | RunError::PlanFrames(_)
@@ -99,6 +103,8 @@ pub struct FrameDone<'a> {
     pub automatic_camera: bool,
     /// The GPU adapter the run renders on, if any.
     pub adapter: Option<&'a str>,
+    /// The frame was on disk already and not rendered (`skip_existing`).
+    pub skipped: bool,
 }
 
 /// A loaded scene with its world built, ready to render frames.
@@ -454,7 +460,8 @@ fn frame_job<'a>(
 }
 
 /// The contact sheet `settings` ask for at `path`: over `sheet_frames`
-/// when given, else over the run's `frames`.
+/// when given, else over the run's `frames`; refused before any frame
+/// renders when it would be too large.
 fn shot_sheet(path: &Path, settings: &Settings, frames: &FrameSet) -> Result<ShotSheet, RunError> {
     let sheet_frames = match &settings.sheet_frames {
         Some(text) => {
@@ -463,7 +470,13 @@ fn shot_sheet(path: &Path, settings: &Settings, frames: &FrameSet) -> Result<Sho
         None => frames.clone(),
     };
     let (columns, every) = (settings.sheet_columns, settings.sheet_every);
-    Ok(ShotSheet::new(path, sheet_frames.frames(), columns, every))
+    let sheet = ContactSheet::new(columns, every, settings.sheet_thumb_width);
+    let frame_size = (settings.width, settings.height);
+    (sheet.fits(sheet_frames.len(), frame_size)).map_err(|fault| RunError::SheetSize {
+        path: path.display().to_string(),
+        fault,
+    })?;
+    Ok(ShotSheet::new(path, sheet_frames.frames(), sheet))
 }
 
 /// The backend and the loaded scene `job` runs on, following its plan,
@@ -561,12 +574,23 @@ pub fn warm(job: &Job) -> Result<WarmStats, RunError> {
     Ok(warm)
 }
 
-/// A rendered frame whose files the writer has: what reporting it takes.
+/// A rendered frame whose files the writer has, or a frame skipped as on
+/// disk already: what reporting it takes.
 struct FrameInWriting {
     index: usize,
     stats: FrameStats,
     path: PathBuf,
     automatic_camera: bool,
+    skipped: bool,
+}
+
+/// Whether `settings` skip `frame` as on disk already: its files whole
+/// and of the run's size ([`output::frame_on_disk`]).
+fn skips(settings: &Settings, pattern: &FramePattern, frame: u32) -> bool {
+    let exr = settings.exr.then(|| pattern.path_for(frame));
+    let png = settings.png.then(|| pattern.png_path_for(frame));
+    let size = (settings.width, settings.height);
+    settings.skip_existing && output::frame_on_disk(exr.as_deref(), png.as_deref(), size)
 }
 
 /// Renders every frame of `job`, writing each while the next renders, and
@@ -598,17 +622,23 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
     let mut in_writing: Option<FrameInWriting> = None;
     let mut report = |done: FrameInWriting, writer: &mut BackgroundWriter| {
         let mut stats = done.stats;
-        let write_seconds = writer.wait()?.unwrap_or_default();
-        stats.add_stage_time("output", write_seconds);
-        stats.seconds += write_seconds;
+        if !done.skipped {
+            let write_seconds = writer.wait()?.unwrap_or_default();
+            stats.add_stage_time("output", write_seconds);
+            stats.seconds += write_seconds;
+        }
         on_frame(FrameDone {
             index: done.index,
             stats: &stats,
             path: &done.path,
             automatic_camera: done.automatic_camera,
             adapter: run.adapter.as_deref(),
+            skipped: done.skipped,
         });
-        run.frames.push(stats);
+        match done.skipped {
+            true => run.skipped.push(stats.frame),
+            false => run.frames.push(stats),
+        }
         Ok::<(), RunError>(())
     };
     for (index, &frame) in job.frames.frames().iter().enumerate() {
@@ -617,6 +647,25 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
             frame,
             ..FrameStats::default()
         };
+        // A skipped frame is not advanced to: the next frame rendered
+        // follows the last one rendered, as a farm chunk's first frame
+        // follows nothing, and the masks invalidate across the gap alike.
+        // The contact sheet reads it back from disk.
+        if skips(settings, job.pattern, frame) {
+            if let Some(done) = in_writing.take() {
+                report(done, &mut writer)?;
+            }
+            let path = job.pattern.path_for(frame);
+            let skipped = FrameInWriting {
+                index,
+                stats,
+                path,
+                automatic_camera: false,
+                skipped: true,
+            };
+            report(skipped, &mut writer)?;
+            continue;
+        }
         let placed = sequence.advance(timeline.time_of(frame), settings, &mut stats)?;
         let rendered = sequence.render_frame(&mut backend, &placed, settings, &mut stats)?;
         if let Some(sheet) = &mut sheet {
@@ -639,6 +688,7 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
             stats,
             path,
             automatic_camera: placed.automatic_camera,
+            skipped: false,
         });
     }
     if let Some(done) = in_writing.take() {

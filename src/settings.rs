@@ -30,8 +30,8 @@ pub const PREVIEW_SCALE: u32 = 4;
 
 /// The deepest Whitted recursion accepted; deeper only costs time.
 pub const MAX_DEPTH: u32 = 64;
-/// Most thumbnails in a contact sheet's row: the sheet is one frame wide,
-/// so more makes thumbnails of a few pixels.
+/// Most thumbnails in a contact sheet's row: 64 of the default width make
+/// a sheet as wide as the widest it may be (`output::contact_sheet`).
 pub const MAX_SHEET_COLUMNS: u32 = 64;
 
 /// Largest exposure, in stops either way: 2^±64 takes any radiance a float
@@ -68,12 +68,18 @@ pub struct Settings {
     /// +1 doubles the linear radiance before tone mapping. The EXR frames
     /// are never scaled.
     pub exposure: f32,
+    /// Leave out the frames whose files are on disk already and read back
+    /// whole (`--skip-existing`): a stopped shot resumes where it stopped.
+    pub skip_existing: bool,
     /// A contact sheet of the run's frames to write at its end (PNG).
     pub contact_sheet: Option<String>,
     /// Thumbnails per row of the contact sheet.
     pub sheet_columns: u32,
     /// The sheet shows every this many-th frame of its frames.
     pub sheet_every: u32,
+    /// Width of the contact sheet's thumbnails in pixels; None: 256, or
+    /// the frame's width where that is smaller.
+    pub sheet_thumb_width: Option<u32>,
     /// The frames of the shot the sheet is over (a frame range such as
     /// `0..240`); those the run does not render are read back from their
     /// EXR files. None: the run's frames.
@@ -120,9 +126,11 @@ impl Default for Settings {
             exr: true,
             png: false,
             exposure: 0.0,
+            skip_existing: false,
             contact_sheet: None,
             sheet_columns: 6,
             sheet_every: 1,
+            sheet_thumb_width: None,
             sheet_frames: None,
             plan_frames: None,
             background: None,
@@ -447,6 +455,17 @@ impl Settings {
         }
         if self.sheet_every == 0 {
             return Err("sheet_every is 0; it must be at least 1".into());
+        }
+        if let Some(width) = self
+            .sheet_thumb_width
+            .filter(|&w| w == 0 || w > MAX_DIMENSION)
+        {
+            return Err(format!(
+                "sheet_thumb_width is {width}; it must be 1 to {MAX_DIMENSION}"
+            ));
+        }
+        if self.skip_existing && self.contact_sheet.is_some() && !self.exr {
+            return Err("skip_existing puts skipped frames on the contact sheet from their EXR files, and exr is false (--preview writes PNG only): leave out the contact sheet or skip_existing".into());
         }
         if !self.exr && !self.aovs.is_empty() {
             return Err("aovs go into the EXR frames, and exr is false".into());

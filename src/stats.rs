@@ -138,7 +138,11 @@ impl FrameStats {
 /// What a whole run cost.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct RunStats {
+    /// The frames rendered.
     pub frames: Vec<FrameStats>,
+    /// The frames not rendered because they were on disk already
+    /// (`--skip-existing`), in order.
+    pub skipped: Vec<u32>,
     pub total_seconds: f64,
     pub threads: usize,
     pub method: String,

@@ -274,20 +274,6 @@ fn albedo_normal_and_depth_hold_what_the_camera_sees() {
     );
 }
 
-/// The Python interpreter with the `OpenEXR` package (`.ci/run` makes a
-/// virtual environment with it and names it in `LMANIM_OPENEXR_PYTHON`),
-/// or None off CI when none is named.
-fn openexr_python() -> Option<String> {
-    match std::env::var("LMANIM_OPENEXR_PYTHON") {
-        Ok(python) => Some(python),
-        Err(_) if std::env::var_os("CI").is_none() => {
-            eprintln!("skipped: LMANIM_OPENEXR_PYTHON names no Python with OpenEXR");
-            None
-        }
-        Err(_) => panic!("CI must name a Python with OpenEXR in LMANIM_OPENEXR_PYTHON"),
-    }
-}
-
 #[test]
 fn openexrs_own_reader_lists_the_layers() {
     let Some(python) = openexr_python() else {

@@ -303,6 +303,8 @@ fn a_contact_sheet_shows_the_runs_frames() {
         "2",
         "--sheet-every",
         "2",
+        "--sheet-thumb-width",
+        "60",
         "--exposure",
         "1",
         "--quiet",
@@ -319,4 +321,111 @@ fn a_contact_sheet_shows_the_runs_frames() {
         let output = lmanim(&[&courtyard(), "--contact-sheet", "x.png", flag, value]);
         assert_bad_input(&output, &flag[2..].replace('-', "_"));
     }
+}
+
+/// A stopped shot resumed with `--skip-existing`: frames 4–6 are on disk
+/// whole, frame 2 was cut short. Only 0–3 and 7 render; every frame then
+/// equals the one of a whole run, and frame 7, rendered after the gap of
+/// skipped frames, equals frame 7 rendered alone, bit for bit (the masks
+/// reused across the gap are invalidated as a farm chunk's are).
+#[test]
+fn skip_existing_renders_only_missing_and_damaged_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = courtyard();
+    let render = |out: &Path, frames: &str, extra: &[&str]| -> Output {
+        let pattern = out.join("frame.####.exr");
+        let mut args = vec![scene.as_str(), "--frames", frames, "--width", "48"];
+        args.extend(["--height", "27", "--method", "lmm1", "--no-cache"]);
+        args.extend(["--out", pattern.to_str().unwrap()]);
+        args.extend(extra);
+        let output = lmanim(&args);
+        assert!(output.status.success(), "{}", stderr(&output));
+        output
+    };
+    let (whole, alone, resumed) = (
+        dir.path().join("whole"),
+        dir.path().join("alone"),
+        dir.path().join("resumed"),
+    );
+    render(&whole, "0..8", &["--quiet"]);
+    render(&alone, "7", &["--quiet"]);
+    std::fs::create_dir_all(&resumed).unwrap();
+    // The courtyard's settings ask for PNG previews: a frame is its EXR and its PNG.
+    let name = |frame: u32, extension: &str| format!("frame.{frame:04}.{extension}");
+    for frame in 4..=6 {
+        for extension in ["exr", "png"] {
+            let file = name(frame, extension);
+            std::fs::copy(whole.join(&file), resumed.join(&file)).unwrap();
+        }
+    }
+    let cut = std::fs::read(whole.join(name(2, "exr"))).unwrap();
+    std::fs::write(resumed.join(name(2, "exr")), &cut[..cut.len() / 2]).unwrap();
+    std::fs::copy(whole.join(name(2, "png")), resumed.join(name(2, "png"))).unwrap();
+
+    let stats = dir.path().join("stats.json");
+    let sheet = dir.path().join("sheet.png");
+    let output = render(
+        &resumed,
+        "0..8",
+        &[
+            "--skip-existing",
+            "--stats",
+            stats.to_str().unwrap(),
+            "--contact-sheet",
+            sheet.to_str().unwrap(),
+        ],
+    );
+    let said = stderr(&output);
+    assert!(
+        said.contains("rendered 5 frame(s)") && said.contains("skipped 3 frame(s) already on disk"),
+        "{said}"
+    );
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    let rendered: Vec<u64> = (json["frames"].as_array().unwrap().iter())
+        .map(|f| f["frame"].as_u64().unwrap())
+        .collect();
+    assert_eq!(rendered, [0, 1, 2, 3, 7]);
+    assert_eq!(json["skipped"], serde_json::json!([4, 5, 6]));
+
+    let read =
+        |dir: &Path, frame: u32| lmanim::output::read_exr(&dir.join(name(frame, "exr"))).unwrap();
+    for frame in 0..8 {
+        assert_eq!(read(&resumed, frame), read(&whole, frame), "frame {frame}");
+    }
+    assert_eq!(
+        read(&resumed, 7),
+        read(&alone, 7),
+        "frame 7 after the gap, and alone"
+    );
+    // The sheet shows all eight, the skipped ones read from disk: two
+    // rows of six cells of 48×27.
+    let image = image::open(&sheet).expect("the sheet").to_rgba8();
+    assert_eq!(image.dimensions(), (6 * 48, 2 * 27));
+    let lit = |x: u32, y: u32| image.get_pixel(x, y).0[3] > 0;
+    assert!(
+        (0..48).any(|x| (27..54).any(|y| lit(x + 48, y))),
+        "frame 7's cell holds its picture"
+    );
+    assert!(
+        (0..48).any(|x| (0..27).any(|y| lit(x + 5 * 48, y))),
+        "skipped frame 5's cell holds its picture"
+    );
+
+    // A PNG-only run has no EXR to put a skipped frame on the sheet from.
+    let preview = [
+        scene.as_str(),
+        "--preview",
+        "--skip-existing",
+        "--contact-sheet",
+        "x.png",
+    ];
+    assert_bad_input(&lmanim(&preview), "skip_existing puts skipped frames");
+
+    // Nothing missing: nothing rendered.
+    let again = render(&resumed, "0..8", &["--skip-existing"]);
+    assert!(
+        stderr(&again).contains("rendered 0 frame(s)") && stderr(&again).contains("skipped 8"),
+        "{}",
+        stderr(&again)
+    );
 }

@@ -72,8 +72,8 @@ fn frames_on_disk_are_read_back_into_the_sheet() {
     let (whole, parts) = (sheet(whole.path()), sheet(parts.path()));
     assert_eq!(
         parts.dimensions(),
-        (96, 36),
-        "two rows of three 32×18 cells"
+        (288, 108),
+        "two rows of three cells of 96×54: frames narrower than 256 pixels are not shrunk"
     );
     assert_eq!(whole.as_raw(), parts.as_raw());
 }
@@ -88,7 +88,37 @@ fn a_frame_not_on_disk_is_left_out_with_a_warning() {
     assert_eq!(warnings.len(), 2, "{stderr}");
     assert!(warnings[0].contains("frame.0000.exr") && warnings[1].contains("frame.0002.exr"));
     // One cell: frame 1.
-    assert_eq!(sheet(dir.path()).dimensions(), (32, 18));
+    assert_eq!(sheet(dir.path()).dimensions(), (96, 54));
+}
+
+#[test]
+fn a_sheet_too_large_is_refused_before_the_first_frame() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    // 2400 thumbnails of 96×54 in 3 columns: 43200 pixels high.
+    let run = render(dir.path(), "0", &["--sheet-frames", "0..2400"]);
+    assert_bad_input(
+        &run,
+        "sheet.png: the contact sheet of 2400 thumbnails of 96x54",
+    );
+    assert!(String::from_utf8_lossy(&run.stderr).contains("--sheet-every"));
+    assert!(
+        !dir.path().join("frame.0000.exr").exists(),
+        "nothing rendered"
+    );
+    // Every 10th frame fits.
+    let every_tenth = [
+        "--sheet-frames",
+        "0..2400",
+        "--sheet-every",
+        "10",
+        "--quiet",
+    ];
+    let fits = render(dir.path(), "0", &every_tenth);
+    assert!(
+        fits.status.success(),
+        "{}",
+        String::from_utf8_lossy(&fits.stderr)
+    );
 }
 
 #[test]

@@ -107,7 +107,7 @@ type BreakRule = fn(&mut Settings);
 /// Each case breaks one rule; the message must name the field.
 #[test]
 fn impossible_values_are_rejected() {
-    let cases: [(&str, BreakRule); 21] = [
+    let cases: [(&str, BreakRule); 24] = [
         ("width", |s| s.width = 0),
         ("width", |s| s.width = 32769),
         ("height", |s| s.height = 0),
@@ -135,6 +135,15 @@ fn impossible_values_are_rejected() {
             s.lamps.radius.insert("Key".into(), f32::NAN);
         }),
         ("threads", |s| s.threads = Some(0)),
+        ("sheet_thumb_width", |s| s.sheet_thumb_width = Some(0)),
+        ("sheet_thumb_width", |s| s.sheet_thumb_width = Some(40000)),
+        ("skip_existing", |s| {
+            *s = Settings {
+                skip_existing: true,
+                contact_sheet: Some("sheet.png".into()),
+                ..s.clone().preview()
+            }
+        }),
     ];
     for (field, break_it) in cases {
         let mut settings = Settings::default();

@@ -9,13 +9,17 @@ mod common;
 
 use common::cli::{assert_bad_input, lmanim};
 use common::*;
+use exr::prelude::{
+    AnyChannel, AnyChannels, Encoding, FlatSamples, ImageAttributes, Layer, LayerAttributes,
+    SmallVec, WritableImage,
+};
 use glam::{Vec3, Vec4};
 use lmanim::backend::{Backend, CpuBackend};
-use lmanim::output::{write_exr, ExrPrecision, Image};
+use lmanim::output::{read_exr, read_exr_picture, write_exr, ExrPrecision, Image};
 use lmanim::sequence::Sequence;
 use lmanim::settings::{BackendKind, Method, Settings};
 use lmanim::stats::FrameStats;
-use lmanim::study::measure::Reference;
+use lmanim::study::measure::{Mask, Reference};
 use lmanim_authoring::study::StudyScene;
 
 fn box_scene(dir: &Path) -> String {
@@ -152,6 +156,218 @@ fn a_given_reference_is_measured_against_with_its_mask() {
     );
 }
 
+/// A part of an EXR: its name, if any, and its channels' names and values.
+type Part<'a> = (Option<&'a str>, Vec<(&'a str, Vec<f32>)>);
+
+/// Writes `parts` (a part's name, if any, and its channels) as one EXR of
+/// `size`, laid out as a tool other than lmanim may: one-channel files,
+/// RGB without alpha, the beauty in a named part after another part,
+/// layers as channel prefixes.
+fn write_parts(path: &Path, size: (usize, usize), parts: Vec<Part>) {
+    let layers: Vec<_> = parts
+        .into_iter()
+        .map(|(name, channels)| {
+            let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = (channels.into_iter())
+                .map(|(channel, values)| AnyChannel::new(channel, FlatSamples::F32(values)))
+                .collect();
+            let attributes = name.map_or_else(LayerAttributes::default, LayerAttributes::named);
+            Layer::new(
+                size,
+                attributes,
+                Encoding::SMALL_LOSSLESS,
+                AnyChannels::sort(list),
+            )
+        })
+        .collect();
+    exr::image::Image::from_layers(ImageAttributes::with_size(size), layers)
+        .write()
+        .to_file(path)
+        .unwrap();
+}
+
+/// The study's reference, masked by `mask` and read from `layer` of
+/// `reference`: its pixel census (lit, edge, masked, penumbra).
+fn census(scene: &str, out: &Path, reference: &Path, layer: Option<&str>, mask: &Path) -> [u64; 4] {
+    let mut args = vec!["study", scene, "--quiet", "--width", "48", "--height", "27"];
+    args.extend(["--methods", "whitted", "--out", out.to_str().unwrap()]);
+    args.extend(["--reference", reference.to_str().unwrap()]);
+    args.extend(["--reference-mask", mask.to_str().unwrap()]);
+    if let Some(layer) = layer {
+        args.extend(["--reference-layer", layer]);
+    }
+    let output = lmanim(&args);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{}: {stderr}", mask.display());
+    let json: serde_json::Value = serde_json::from_str(&text(&out.join("study.json"))).unwrap();
+    [
+        "lit_pixels",
+        "edge_pixels",
+        "masked_pixels",
+        "penumbra_pixels",
+    ]
+    .map(|key| json["reference"][key].as_u64().unwrap())
+}
+
+/// Another tool's files: OpenEXR's own writer (Python) rewrites the
+/// reference as RGBA and writes the left-half mask as `Y` alone and as
+/// RGB without alpha (green 0.5 on the left). Returns their paths, or
+/// None where no such Python is named.
+fn openexr_files(dir: &Path, reference: &Path) -> Option<[PathBuf; 3]> {
+    let python = openexr_python()?;
+    let files = ["ref_py.exr", "y_py.exr", "rgb_py.exr"].map(|name| dir.join(name));
+    let script = "import sys, numpy as np, OpenEXR\n\
+                  source, rgba_out, y_out, rgb_out = sys.argv[1:5]\n\
+                  with OpenEXR.File(source) as f:\n    rgba = f.channels()['RGBA'].pixels.astype(np.float32)\n\
+                  h, w = rgba.shape[:2]\n\
+                  header = {'compression': OpenEXR.ZIP_COMPRESSION, 'type': OpenEXR.scanlineimage}\n\
+                  OpenEXR.File(header, {'RGBA': rgba}).write(rgba_out)\n\
+                  left = np.zeros((h, w), dtype=np.float32)\n\
+                  left[:, : w // 2] = 1.0\n\
+                  OpenEXR.File(header, {'Y': left}).write(y_out)\n\
+                  rgb = np.zeros((h, w, 3), dtype=np.float32)\n\
+                  rgb[:, : w // 2, 1] = 0.5\n\
+                  OpenEXR.File(header, {'RGB': rgb}).write(rgb_out)\n";
+    let mut args = vec![
+        "-c".to_owned(),
+        script.to_owned(),
+        reference.display().to_string(),
+    ];
+    args.extend(files.iter().map(|path| path.display().to_string()));
+    let run = std::process::Command::new(&python)
+        .args(&args)
+        .output()
+        .expect("run Python");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    Some(files)
+}
+
+#[test]
+fn references_and_masks_of_any_layout_leave_out_exactly_the_masks_pixels() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = box_scene(dir.path());
+    let first = dir.path().join("first");
+    let mut args = vec!["study", scene.as_str(), "--quiet"];
+    args.extend(TINY);
+    args.extend(["--methods", "whitted", "--out", first.to_str().unwrap()]);
+    assert!(lmanim(&args).status.success());
+    let reference_path = first.join("reference.exr");
+    let reference = read_exr(&reference_path).unwrap();
+    let size = (48, 27);
+
+    // The left half of the frame, as the mask's pixels.
+    let left: Vec<bool> = (0..48 * 27).map(|i| i % 48 < 24).collect();
+    let level = |on: f32| -> Vec<f32> { left.iter().map(|&l| if l { on } else { 0.0 }).collect() };
+    let zeros = vec![0.0; 48 * 27];
+    let rgba_mask = dir.path().join("rgba_mask.exr");
+    let as_rgba = level(1.0).into_iter().map(Vec4::splat).collect();
+    write_exr(
+        &rgba_mask,
+        &Image {
+            width: 48,
+            height: 27,
+            pixels: as_rgba,
+        },
+        ExrPrecision::Half,
+    )
+    .unwrap();
+    let y_mask = dir.path().join("y_mask.exr");
+    write_parts(&y_mask, size, vec![(None, vec![("Y", level(1.0))])]);
+    let rgb_mask = dir.path().join("rgb_mask.exr");
+    let rgb = vec![
+        ("R", zeros.clone()),
+        ("G", level(0.5)),
+        ("B", zeros.clone()),
+    ];
+    write_parts(&rgb_mask, size, vec![(None, rgb)]);
+
+    // The reference in other layouts: the beauty as a named part after a
+    // depth part, and as a layer of prefixed channels.
+    let channel = |k: usize| reference.pixels.iter().map(|p| p[k]).collect::<Vec<f32>>();
+    let multi_part = dir.path().join("multi_part.exr");
+    let beauty = ["R", "G", "B", "A"]
+        .into_iter()
+        .enumerate()
+        .map(|(k, c)| (c, channel(k)))
+        .collect();
+    write_parts(
+        &multi_part,
+        size,
+        vec![
+            (Some("depth"), vec![("Z", zeros.clone())]),
+            (Some("rgba"), beauty),
+        ],
+    );
+    let layered = dir.path().join("layered.exr");
+    let names = ["R", "G", "B", "A"].map(|c| format!("ViewLayer.Combined.{c}"));
+    let mut layer_channels: Vec<(&str, Vec<f32>)> = (names.iter().enumerate())
+        .map(|(k, name)| (name.as_str(), channel(k)))
+        .collect();
+    layer_channels.push(("ViewLayer.Depth.Z", zeros.clone()));
+    write_parts(&layered, size, vec![(None, layer_channels)]);
+
+    let mut masks = vec![rgba_mask.clone(), y_mask.clone(), rgb_mask.clone()];
+    let mut references = vec![
+        (multi_part.clone(), None, y_mask.clone()),
+        (
+            layered.clone(),
+            Some("ViewLayer.Combined"),
+            rgb_mask.clone(),
+        ),
+    ];
+    if let Some([py_reference, py_y, py_rgb]) = openexr_files(dir.path(), &reference_path) {
+        masks.extend([py_y.clone(), py_rgb.clone()]);
+        references.extend([
+            (py_reference.clone(), None, py_y),
+            (py_reference, None, py_rgb),
+        ]);
+    }
+    // Every mask leaves out exactly its left half: alpha in RGBA, Y in a
+    // one-channel file, the largest channel in RGB without alpha.
+    for mask in &masks {
+        let picture = read_exr_picture(mask, None).unwrap();
+        assert_eq!(Mask::of(&picture).left_out, left, "{}", mask.display());
+    }
+    // Every reference reads as the one lmanim wrote.
+    for (path, layer, _) in &references {
+        let picture = read_exr_picture(path, *layer).unwrap();
+        assert_eq!(picture.image, reference, "{}", path.display());
+    }
+
+    // The study accepts each, and measures the same pixels as with the
+    // RGBA mask lmanim writes: the mask's pixels taken out of those
+    // measured, and only those.
+    let unmasked: serde_json::Value =
+        serde_json::from_str(&text(&first.join("study.json"))).unwrap();
+    let count = |key: &str| unmasked["reference"][key].as_u64().unwrap();
+    let expected = census(
+        &scene,
+        &dir.path().join("rgba"),
+        &reference_path,
+        None,
+        &rgba_mask,
+    );
+    let [lit, edge, masked, _] = expected;
+    assert!(masked > 0 && lit > 0);
+    assert_eq!(
+        count("lit_pixels") + count("edge_pixels"),
+        lit + edge + masked
+    );
+    for (index, (path, layer, mask)) in references.iter().enumerate() {
+        let out = dir.path().join(format!("study{index}"));
+        assert_eq!(
+            census(&scene, &out, path, *layer, mask),
+            expected,
+            "{} with {}",
+            path.display(),
+            mask.display()
+        );
+    }
+}
+
 #[test]
 fn bad_input_stops_the_study_with_one_line() {
     let dir = tempfile::tempdir().unwrap();
@@ -186,6 +402,48 @@ fn bad_input_stops_the_study_with_one_line() {
     assert_bad_input(&output, "small.exr");
     assert!(String::from_utf8_lossy(&output.stderr).contains("4x4"));
     assert_bad_input(&study(&["--reference-spp", "0"]), "--reference-spp");
+    // Nothing to measure: a reference in umbra everywhere has no
+    // penumbra; a mask over everything leaves no lit pixel.
+    let dark = dir.path().join("dark.exr");
+    write_exr(
+        &dark,
+        &Image::filled(48, 27, Vec4::ZERO),
+        ExrPrecision::Half,
+    )
+    .unwrap();
+    let dark_arg = dark.to_str().unwrap();
+    let output = study(&["--reference", dark_arg]);
+    assert_bad_input(
+        &output,
+        "dark.exr: the reference leaves no penumbra pixel to measure",
+    );
+    let everything = dir.path().join("everything.exr");
+    write_exr(
+        &everything,
+        &Image::filled(48, 27, Vec4::ONE),
+        ExrPrecision::Half,
+    )
+    .unwrap();
+    let output = study(&[
+        "--reference",
+        dark_arg,
+        "--reference-mask",
+        everything.to_str().unwrap(),
+    ]);
+    assert_bad_input(&output, "the reference leaves no lit pixel to measure");
+    assert!(String::from_utf8_lossy(&output.stderr).contains("0 lit"));
+    // A file of no layout lmanim reads names the channels it holds.
+    let odd = dir.path().join("odd.exr");
+    write_parts(
+        &odd,
+        (48, 27),
+        vec![(None, vec![("Z", vec![1.0; 48 * 27])])],
+    );
+    let output = study(&["--reference", odd.to_str().unwrap()]);
+    assert_bad_input(&output, "odd.exr: cannot read EXR: no beauty");
+    assert!(String::from_utf8_lossy(&output.stderr).contains("found channels Z"));
+    let output = study(&["--reference", dark_arg, "--reference-layer", "spec"]);
+    assert_bad_input(&output, "no layer 'spec'; found channels A, B, G, R");
     assert_bad_input(
         &lmanim(&["study", &scene, "--width", "0", "--out", out]),
         "width",

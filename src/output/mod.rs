@@ -1,4 +1,5 @@
-//! The end of a frame's data flow: rendered [`Image`]s become files. EXR
+//! The end of a frame's data flow: rendered [`Image`]s become files (and
+//! EXRs of any common layout are read back, `exr_read.rs`). EXR
 //! frames hold linear radiance (half floats by default), PNG previews are
 //! tone-mapped and sRGB-encoded, frame names come from a `#` pattern, and
 //! storyboards get a contact sheet. Frames are written on a thread of
@@ -9,7 +10,9 @@ mod atomic;
 mod background;
 mod contact_sheet;
 mod error;
+mod existing;
 mod exr;
+mod exr_read;
 mod label;
 mod pattern;
 mod png;
@@ -19,7 +22,9 @@ pub use atomic::write_atomically;
 pub use background::{BackgroundWriter, FrameFiles};
 pub use contact_sheet::ContactSheet;
 pub use error::OutputError;
-pub use exr::{read_exr, write_exr, write_layered_exr};
+pub use existing::frame_on_disk;
+pub use exr::{write_exr, write_layered_exr};
+pub use exr_read::{read_exr, read_exr_picture, ExrChannels, ExrPicture};
 pub use label::FONT;
 pub use pattern::FramePattern;
 pub use png::{tone_map, write_png_preview, write_srgb_png};

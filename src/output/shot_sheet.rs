@@ -19,14 +19,13 @@ pub struct ShotSheet {
 }
 
 impl ShotSheet {
-    /// A sheet at `path` over `frames` (ascending), every `every`-th on it,
-    /// `columns` to a row.
-    pub fn new(path: &Path, frames: &[u32], columns: u32, every: u32) -> ShotSheet {
+    /// `sheet` at `path` over `frames` (ascending).
+    pub fn new(path: &Path, frames: &[u32], sheet: ContactSheet) -> ShotSheet {
         ShotSheet {
             path: path.to_path_buf(),
             frames: frames.to_vec(),
             rendered: vec![false; frames.len()],
-            sheet: ContactSheet::new(columns, every),
+            sheet,
         }
     }
 

@@ -13,7 +13,8 @@
 //! gives instead of a multiple of nothing.
 //!
 //! Pixels taken into account ("lit"): U is at least [`LIT_FLOOR`] of the
-//! brightest unshadowed pixel, the reference's mask (if any) is 0, and
+//! brightest unshadowed pixel, the reference's mask (if any) is not above
+//! 0 there (see [`Mask`]), and
 //! the pixel is not on a geometric edge, where the frame's pixel centre
 //! and the reference's pixel area see different surfaces: the error there
 //! is anti-aliasing, which no shadow method changes. A pixel is on an
@@ -24,7 +25,7 @@
 use glam::Vec4;
 use serde::Serialize;
 
-use crate::output::Image;
+use crate::output::{ExrPicture, Image};
 
 /// Unshadowed luminance, as a share of the frame's brightest, below which
 /// a pixel is left out (its relative error would only measure noise).
@@ -61,6 +62,28 @@ pub struct SizeMismatch {
     pub height: u32,
 }
 
+/// The pixels a reference's mask leaves out: those whose matte is above
+/// 0, the matte being the mask file's alpha where it has one, else its
+/// luminance (a one-channel `Y` file) or its largest colour channel
+/// ([`ExrPicture::matte`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mask {
+    pub width: u32,
+    pub height: u32,
+    /// Per pixel, row-major: left out.
+    pub left_out: Vec<bool>,
+}
+
+impl Mask {
+    pub fn of(picture: &ExrPicture) -> Mask {
+        Mask {
+            width: picture.image.width,
+            height: picture.image.height,
+            left_out: picture.matte().iter().map(|&matte| matte > 0.0).collect(),
+        }
+    }
+}
+
 /// The reference with what the measure needs per pixel.
 #[derive(Clone, Debug)]
 pub struct Reference {
@@ -86,21 +109,40 @@ pub struct Census {
     pub masked_pixels: usize,
 }
 
+impl Census {
+    /// Why a reference so classified gives the study nothing to rank, if
+    /// it does: no lit pixel (every error would be over nothing), or no
+    /// penumbra pixel (soft shadows, what the methods differ in, are
+    /// nowhere in view).
+    pub fn nothing_to_measure(&self) -> Option<String> {
+        let why = match (self.lit_pixels, self.penumbra_pixels) {
+            (0, _) => "no lit pixel",
+            (_, 0) => "no penumbra pixel",
+            _ => return None,
+        };
+        Some(format!(
+            "the reference leaves {why} to measure (of {} pixels: {} lit, {} left out by the mask, {} on geometric edges, the rest unlit)",
+            self.pixels, self.lit_pixels, self.masked_pixels, self.edge_pixels
+        ))
+    }
+}
+
 impl Reference {
     /// `image` measured against `unshadowed_centre` (one sample at each
     /// pixel centre, as the frames measured are rendered) and
     /// `unshadowed_area` (several samples over each pixel, as the
-    /// reference is); pixels where `mask` is above 0 are left out.
+    /// reference is); the pixels `mask` leaves out are left out.
     pub fn new(
         image: Image,
         unshadowed_centre: &Image,
         unshadowed_area: &Image,
-        mask: Option<&Image>,
+        mask: Option<&Mask>,
     ) -> Result<Reference, SizeMismatch> {
-        same_size("the unshadowed frame", unshadowed_centre, &image)?;
-        same_size("the unshadowed frame", unshadowed_area, &image)?;
+        let size = |image: &Image| (image.width, image.height);
+        same_size("the unshadowed frame", size(unshadowed_centre), &image)?;
+        same_size("the unshadowed frame", size(unshadowed_area), &image)?;
         if let Some(mask) = mask {
-            same_size("the reference mask", mask, &image)?;
+            same_size("the reference mask", (mask.width, mask.height), &image)?;
         }
         let unshadowed: Vec<f64> = unshadowed_centre
             .pixels
@@ -118,7 +160,7 @@ impl Reference {
             if u <= 0.0 || u < LIT_FLOOR * brightest {
                 continue;
             }
-            if mask.is_some_and(|mask| mask.pixels[i].max_element() > 0.0) {
+            if mask.is_some_and(|mask| mask.left_out[i]) {
                 census.masked_pixels += 1;
                 continue;
             }
@@ -153,7 +195,11 @@ impl Reference {
 
     /// How far `image` is from the reference.
     pub fn errors(&self, image: &Image) -> Result<Errors, SizeMismatch> {
-        same_size("the frame measured", image, &self.image)?;
+        same_size(
+            "the frame measured",
+            (image.width, image.height),
+            &self.image,
+        )?;
         let mut lit = Accumulator::default();
         let mut penumbra = Accumulator::default();
         for (i, (&measured, &reference)) in image.pixels.iter().zip(&self.image.pixels).enumerate()
@@ -176,14 +222,18 @@ impl Reference {
     }
 }
 
-fn same_size(what: &str, image: &Image, reference: &Image) -> Result<(), SizeMismatch> {
-    if (image.width, image.height) == (reference.width, reference.height) {
+fn same_size(
+    what: &str,
+    (width, height): (u32, u32),
+    reference: &Image,
+) -> Result<(), SizeMismatch> {
+    if (width, height) == (reference.width, reference.height) {
         return Ok(());
     }
     Err(SizeMismatch {
         what: what.into(),
-        found_width: image.width,
-        found_height: image.height,
+        found_width: width,
+        found_height: height,
         width: reference.width,
         height: reference.height,
     })
@@ -346,7 +396,11 @@ mod tests {
         area.pixels[3] *= 1.5; // an edge: centre and area disagree
         let mut dark = unshadowed.clone();
         dark.pixels[9] = Vec4::ZERO; // no light reaches it
-        let mask = grey(10, 4, |x, y| f32::from(u8::from(x == 8 && y == 1)));
+        let mask = Mask {
+            width: 10,
+            height: 4,
+            left_out: (0..40).map(|i| i == 18).collect(),
+        };
         let measure = Reference::new(reference.clone(), &dark, &area, Some(&mask)).unwrap();
         let census = measure.census;
         assert_eq!(
@@ -358,6 +412,32 @@ mod tests {
             frame.pixels[i] += Vec4::splat(10.0);
         }
         assert_eq!(measure.errors(&frame).unwrap().max_error, 0.0);
+    }
+
+    #[test]
+    fn a_census_without_lit_or_penumbra_pixels_is_nothing_to_measure() {
+        let (reference, unshadowed) = scene();
+        let measure = Reference::new(reference.clone(), &unshadowed, &unshadowed, None).unwrap();
+        assert_eq!(measure.census.nothing_to_measure(), None);
+        // A fully lit frame: no penumbra.
+        let lit = Reference::new(unshadowed.clone(), &unshadowed, &unshadowed, None).unwrap();
+        let fault = lit.census.nothing_to_measure().unwrap();
+        assert!(
+            fault.contains("no penumbra pixel") && fault.contains("40 lit"),
+            "{fault}"
+        );
+        // A mask over everything: nothing lit.
+        let all = Mask {
+            width: 10,
+            height: 4,
+            left_out: vec![true; 40],
+        };
+        let masked = Reference::new(reference, &unshadowed, &unshadowed, Some(&all)).unwrap();
+        let fault = masked.census.nothing_to_measure().unwrap();
+        assert!(
+            fault.contains("no lit pixel") && fault.contains("40 left out by the mask"),
+            "{fault}"
+        );
     }
 
     #[test]

@@ -23,14 +23,14 @@ use std::time::Instant;
 use crate::backend::{Backend, BackendError, CpuBackend};
 use crate::import;
 use crate::lightmesh::spacing::median_lamp_radius;
-use crate::output::{self, ExrPrecision, Image, OutputError};
+use crate::output::{self, ExrPicture, ExrPrecision, Image, OutputError};
 use crate::render::frame::FrameScene;
 use crate::scene::SceneDesc;
 use crate::schedule::Timeline;
 use crate::sequence::{RunError, Sequence};
 use crate::settings::{BackendKind, Method, Settings, SettingsError};
 use crate::stats::FrameStats;
-use measure::{Reference, SizeMismatch};
+use measure::{Mask, Reference, SizeMismatch};
 use plot::{Crop, PlotError};
 use report::{ReferenceReport, StudyReport};
 use sweep::{RunResult, RunSpec};
@@ -60,9 +60,13 @@ pub struct StudyOptions {
     pub width: Option<u32>,
     pub height: Option<u32>,
     /// A ground-truth EXR to measure against instead of rendering one,
-    /// with an optional mask EXR (pixels above 0 are left out).
+    /// with an optional mask EXR (the pixels [`measure::Mask`] says are
+    /// left out).
     pub reference: Option<PathBuf>,
     pub reference_mask: Option<PathBuf>,
+    /// The reference's layer (a part's name or a channel prefix); None
+    /// takes its beauty. The mask is always read from its beauty.
+    pub reference_layer: Option<String>,
     /// Samples per pixel of a rendered reference.
     pub reference_spp: u32,
     /// Methods to sweep, in the order they are run and drawn.
@@ -89,6 +93,8 @@ pub enum StudyError {
     ReadReference(OutputError),
     #[error("{file}: {source}")]
     Size { file: String, source: SizeMismatch },
+    #[error("{file}: {fault}")]
+    NothingToMeasure { file: String, fault: String },
     #[error(transparent)]
     Output(#[from] OutputError),
     #[error(transparent)]
@@ -104,7 +110,8 @@ impl StudyError {
             | StudyError::Usage(_)
             | StudyError::NoLampRadius { .. }
             | StudyError::ReadReference(_)
-            | StudyError::Size { .. } => true,
+            | StudyError::Size { .. }
+            | StudyError::NothingToMeasure { .. } => true,
             StudyError::Backend(_) | StudyError::Output(_) | StudyError::Plot(_) => false,
         }
     }
@@ -315,12 +322,14 @@ impl Bench {
             Some(path) => {
                 report.source = path.display().to_string();
                 progress(&format!("reference: {}", path.display()));
-                let mask = options
-                    .reference_mask
-                    .as_deref()
-                    .map(read_reference)
+                let mask = (options.reference_mask.as_deref())
+                    .map(|mask| read_reference(mask, None))
                     .transpose()?;
-                (read_reference(path)?, mask)
+                let layer = options.reference_layer.as_deref();
+                (
+                    read_reference(path, layer)?.image,
+                    mask.as_ref().map(Mask::of),
+                )
             }
             None => {
                 let spp = options.reference_spp;
@@ -359,8 +368,15 @@ impl Bench {
             .reference
             .as_ref()
             .map_or(self.scene_file.clone(), |path| path.display().to_string());
-        let reference = Reference::new(image, &centre, &area, mask.as_ref())
-            .map_err(|source| StudyError::Size { file, source })?;
+        let reference = Reference::new(image, &centre, &area, mask.as_ref()).map_err(|source| {
+            StudyError::Size {
+                file: file.clone(),
+                source,
+            }
+        })?;
+        if let Some(fault) = reference.census.nothing_to_measure() {
+            return Err(StudyError::NothingToMeasure { file, fault });
+        }
         report.census = reference.census;
         progress(&format!(
             "reference: {} lit pixels, {} in penumbra, {} edge pixels left out",
@@ -372,8 +388,8 @@ impl Bench {
     }
 }
 
-fn read_reference(path: &Path) -> Result<Image, StudyError> {
-    output::read_exr(path).map_err(StudyError::ReadReference)
+fn read_reference(path: &Path, layer: Option<&str>) -> Result<ExrPicture, StudyError> {
+    output::read_exr_picture(path, layer).map_err(StudyError::ReadReference)
 }
 
 /// The rendered reference's own RMSE, from the densest `area` run at s

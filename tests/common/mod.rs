@@ -14,6 +14,20 @@ use lmanim::sequence::Sequence;
 use lmanim::settings::Settings;
 use lmanim::stats::FrameStats;
 
+/// The Python interpreter with the `OpenEXR` package, another tool's EXR
+/// reader and writer (`.ci/run` makes a virtual environment with it and
+/// names it in `LMANIM_OPENEXR_PYTHON`), or None off CI when none is named.
+pub fn openexr_python() -> Option<String> {
+    match std::env::var("LMANIM_OPENEXR_PYTHON") {
+        Ok(python) => Some(python),
+        Err(_) if std::env::var_os("CI").is_none() => {
+            eprintln!("skipped: LMANIM_OPENEXR_PYTHON names no Python with OpenEXR");
+            None
+        }
+        Err(_) => panic!("CI must name a Python with OpenEXR in LMANIM_OPENEXR_PYTHON"),
+    }
+}
+
 pub fn empty_scene() -> SceneDesc {
     SceneDesc {
         name: "test".into(),
