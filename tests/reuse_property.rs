@@ -9,8 +9,9 @@
 //! ground, static boxes and walls, one to eight lights (some moving, some
 //! lamps with a radius), one to four boxes driven along random paths
 //! across shadows and lattice planes (some snapped to lattice nodes), with
-//! a random lattice step, kI, kernel and penumbra mode, for `lmm` and
-//! `lmm1`.
+//! a random lattice step, kI, kernel and penumbra mode, for `lmm`,
+//! `lmm1` and `auto`; some lights have a short range, so the plan switches
+//! them off in some runs' frames and not in others.
 //!
 //! CI runs a fixed set of cases ([`config`]); `LMANIM_REUSE_CASES=N`
 //! runs more (BENCHMARKS.md, "Reuse property"). A failing case is shrunk
@@ -69,6 +70,9 @@ struct Lamp {
     intensity: f32,
     /// 0 for an ideal point.
     radius: f32,
+    /// A range short enough that the plan may find the light reaching
+    /// nothing in view in some frames (then it is switched off there).
+    range: Option<f32>,
 }
 
 /// One generated case: the scene's parts, the light mesh's settings, the
@@ -111,18 +115,17 @@ fn lamp() -> impl Strategy<Value = Lamp> {
     let place =
         || (-6.0f32..6.0, 1.5f32..6.0, -6.0f32..6.0).prop_map(|(x, y, z)| Vec3::new(x, y, z));
     let radius = prop_oneof![Just(0.0f32), 0.05f32..0.4];
-    (
-        place(),
-        proptest::option::weighted(0.3, place()),
-        20.0f32..200.0,
-        radius,
-    )
-        .prop_map(|(at, to, intensity, radius)| Lamp {
+    let range = proptest::option::weighted(0.3, 2.0f32..12.0);
+    let moves = proptest::option::weighted(0.3, place());
+    (place(), moves, 20.0f32..200.0, radius, range).prop_map(
+        |(at, to, intensity, radius, range)| Lamp {
             at,
             to,
             intensity,
             radius,
-        })
+            range,
+        },
+    )
 }
 
 fn case() -> impl Strategy<Value = Case> {
@@ -133,7 +136,9 @@ fn case() -> impl Strategy<Value = Case> {
         any::<bool>(),
         0.0f64..std::f64::consts::TAU,
     );
-    let method = prop_oneof![Just(Method::Lmm), Just(Method::Lmm1)];
+    // `auto` (the default) shades hard lights by shadow rays and soft ones
+    // by LMM1, so the plan's shadow classes take part too.
+    let method = prop_oneof![Just(Method::Lmm), Just(Method::Lmm1), Just(Method::Auto)];
     let kernel = prop_oneof![Just(Kernel::Box), Just(Kernel::Smooth)];
     let penumbra = prop_oneof![
         Just(Penumbra::Fixed),
@@ -192,8 +197,10 @@ impl Case {
         }
         for lamp in &self.lamps {
             let node = add_lamp(&mut scene, lamp.intensity, lamp.at, lamp.radius);
+            let light = scene.lights.last_mut().unwrap();
+            light.range = lamp.range;
             if lamp.radius == 0.0 {
-                scene.lights.last_mut().unwrap().radius = None;
+                light.radius = None;
             }
             if let Some(to) = lamp.to {
                 channels.push(linear_translation(node, lamp.at, to, duration));
