@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
+use crate::backend::gpu::traffic::GpuTraffic;
 use crate::lightmesh::LightMeshStats;
 use crate::plan::Shadows;
 
@@ -126,6 +127,9 @@ pub struct FrameStats {
     /// Light-mesh work, for the LMM and LMM1 methods.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lightmesh: Option<LightMeshStats>,
+    /// What crossed between the CPU and the GPU (`--backend gpu` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gpu: Option<GpuTraffic>,
 }
 
 impl FrameStats {

@@ -3,6 +3,8 @@
 
 use std::fmt;
 
+use super::traffic::Traffic;
+
 /// Storage buffers one pass binds at most: formula (2)'s, which binds its
 /// points and answers, the flat world's seven arrays, the lights, the
 /// points' reaching lights, the mask pool, its directory and its counters.
@@ -68,6 +70,8 @@ pub struct GpuContext {
     pub own_spirv: bool,
     /// Both: then every answer is the CPU's to the bit.
     pub exact: bool,
+    /// What crossed the bus so far.
+    pub traffic: Traffic,
 }
 
 impl GpuContext {
@@ -128,6 +132,7 @@ impl GpuContext {
             f64,
             own_spirv,
             exact: f64 && own_spirv,
+            traffic: Traffic::default(),
         })
     }
 

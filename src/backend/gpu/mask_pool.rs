@@ -413,7 +413,5 @@ fn write_slot(
     let BrickEnclosure { known, enclosed } = store.enclosure(brick);
     words.extend_from_slice(bytemuck::cast_slice(&known));
     words.extend_from_slice(bytemuck::cast_slice(&enclosed));
-    context
-        .queue
-        .write_buffer(slots, offset, bytemuck::cast_slice(&words));
+    context.write(slots, offset, bytemuck::cast_slice(&words));
 }

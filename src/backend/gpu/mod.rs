@@ -39,6 +39,7 @@ mod shaders;
 mod spirv;
 pub(crate) mod surface;
 pub(crate) mod trace;
+pub mod traffic;
 
 use std::sync::OnceLock;
 use std::time::Instant;
@@ -249,6 +250,7 @@ impl GpuBackend {
         stats: &mut FrameStats,
     ) -> Result<RenderedFrame, RenderError> {
         let start = Instant::now();
+        let traffic = self.context.traffic.snapshot();
         let mut aovs = AovFrame::new(job);
         if AovFrame::wants_light_terms(job) {
             self.context.check_light_layers()?;
@@ -286,6 +288,7 @@ impl GpuBackend {
             light_mesh.finish(&self.context, job, stats)?;
         }
         self.mask_pool = Some(pool);
+        stats.gpu = Some(self.context.traffic.since(traffic));
         let image = Image {
             width: job.width,
             height: job.height,

@@ -7,7 +7,6 @@
 //! the GPU; [`WorldPass::run`] is the round trip for a single pass.
 
 use bytemuck::Pod;
-use wgpu::util::DeviceExt;
 
 use super::context::{GpuContext, GpuError};
 use super::scene::GpuScene;
@@ -201,11 +200,11 @@ impl WorldPass {
         debug_assert!(count <= BATCH);
         let device = &context.device;
         let params = scene.params(count as u32, lights, layers);
-        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("pass params"),
-            contents: bytemuck::bytes_of(&params),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let params = context.upload(
+            "pass params",
+            bytemuck::bytes_of(&params),
+            wgpu::BufferUsages::UNIFORM,
+        );
         let world = match self.world {
             WorldUse::Traces => scene.buffers().to_vec(),
             WorldUse::None => Vec::new(),
@@ -292,6 +291,7 @@ pub fn read_back<Out: Pod>(
         mapped_at_creation: false,
     });
     encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
+    context.traffic.waited(bytes);
     context.queue.submit([encoder.finish()]);
     let slice = staging.slice(..);
     let (sender, receiver) = std::sync::mpsc::channel();

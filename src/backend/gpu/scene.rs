@@ -4,7 +4,6 @@
 //! deformed), so a fly-through over a still city uploads nothing.
 
 use bytemuck::{Pod, Zeroable};
-use wgpu::util::DeviceExt;
 
 use super::context::{GpuContext, GpuError};
 use crate::accel::flat::{FlatDynamic, FlatStatic, FlatTriangles};
@@ -165,11 +164,5 @@ pub fn storage<T: Pod>(
     let items = if items.is_empty() { &zero[..] } else { items };
     let contents: &[u8] = bytemuck::cast_slice(items);
     context.check_binding(what, contents.len() as u64)?;
-    Ok(context
-        .device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(what),
-            contents,
-            usage: wgpu::BufferUsages::STORAGE,
-        }))
+    Ok(context.upload(what, contents, wgpu::BufferUsages::STORAGE))
 }

@@ -1,0 +1,88 @@
+//! What crosses between the CPU and the GPU in a run, counted where it
+//! crosses: every upload goes through [`GpuContext::upload`] or
+//! [`GpuContext::write`], and every blocking read-back through
+//! `pass::read_back`, so these counters see all of it. A frame's share is
+//! the difference of two snapshots ([`Traffic::since`]), reported as the
+//! `gpu` object of `--stats`: the measure the GPU-resident light mesh
+//! (issue 33) is held to, a steady frame waiting on the GPU at most twice.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use serde::Serialize;
+use wgpu::util::DeviceExt;
+
+use super::context::GpuContext;
+
+/// Running totals since the device was made.
+#[derive(Debug, Default)]
+pub struct Traffic {
+    waits: AtomicU64,
+    bytes_up: AtomicU64,
+    bytes_down: AtomicU64,
+}
+
+/// One frame's traffic (or a run's, from its first snapshot).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct GpuTraffic {
+    /// Blocking read-backs: each submits what was recorded and waits for
+    /// the GPU to finish it.
+    pub waits: u64,
+    /// Bytes written into GPU buffers (uploads, uniforms, mask bricks).
+    pub bytes_up: u64,
+    /// Bytes read back.
+    pub bytes_down: u64,
+}
+
+impl Traffic {
+    pub fn snapshot(&self) -> GpuTraffic {
+        GpuTraffic {
+            waits: self.waits.load(Ordering::Relaxed),
+            bytes_up: self.bytes_up.load(Ordering::Relaxed),
+            bytes_down: self.bytes_down.load(Ordering::Relaxed),
+        }
+    }
+
+    /// What crossed since `before` was taken.
+    pub fn since(&self, before: GpuTraffic) -> GpuTraffic {
+        let now = self.snapshot();
+        GpuTraffic {
+            waits: now.waits - before.waits,
+            bytes_up: now.bytes_up - before.bytes_up,
+            bytes_down: now.bytes_down - before.bytes_down,
+        }
+    }
+
+    /// Counts one blocking read-back of `bytes`.
+    pub fn waited(&self, bytes: u64) {
+        self.waits.fetch_add(1, Ordering::Relaxed);
+        self.bytes_down.fetch_add(bytes, Ordering::Relaxed);
+    }
+
+    fn sent(&self, bytes: u64) {
+        self.bytes_up.fetch_add(bytes, Ordering::Relaxed);
+    }
+}
+
+impl GpuContext {
+    /// A buffer made holding `contents`, counted as uploaded.
+    pub fn upload(
+        &self,
+        label: &'static str,
+        contents: &[u8],
+        usage: wgpu::BufferUsages,
+    ) -> wgpu::Buffer {
+        self.traffic.sent(contents.len() as u64);
+        (self.device).create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage,
+        })
+    }
+
+    /// Writes `bytes` into `buffer` at `offset` (queued with the next
+    /// submission), counted as uploaded.
+    pub fn write(&self, buffer: &wgpu::Buffer, offset: u64, bytes: &[u8]) {
+        self.traffic.sent(bytes.len() as u64);
+        self.queue.write_buffer(buffer, offset, bytes);
+    }
+}
