@@ -1,0 +1,255 @@
+//! Camera paths end to end: the README's example flight over the city
+//! parses and renders; bad path files and `--orbit` values stop with one
+//! line naming the file and the fault; a moving path camera drops no
+//! light-mesh bit; and `bake-camera` writes a glTF the Khronos validator
+//! accepts, whose clip `lmanim inspect` plays back as the spline's poses,
+//! also from a scene whose buffer lies in an external `.bin`.
+//!
+//! The validator needs Node and npm (see `tests/node_support`).
+
+mod common;
+mod node_support;
+
+use std::path::{Path, PathBuf};
+
+use common::cli::{assert_bad_input, lmanim};
+use glam::{DVec3, Vec3};
+use lmanim::camera_path::CameraPath;
+use lmanim_authoring::{shapes, GltfBuilder, NodeDesc, Primitive};
+use serde_json::Value;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn flight() -> PathBuf {
+    root().join("animations/city-flight.ron")
+}
+
+fn text(path: &Path) -> &str {
+    path.to_str().expect("UTF-8 path")
+}
+
+#[test]
+fn the_city_flight_parses_and_renders_a_small_frame() {
+    let path = CameraPath::load(&flight()).unwrap();
+    assert_eq!((path.start(), path.end()), (0.0, 10.0));
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("frame.####.exr");
+    let run = lmanim(&[
+        text(&root().join("animations/city.gltf")),
+        "--camera-path",
+        text(&flight()),
+        "--frames",
+        "120",
+        "--width",
+        "48",
+        "--height",
+        "27",
+        "--no-cache",
+        "--quiet",
+        "--out",
+        text(&out),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let image = lmanim::output::read_exr(&dir.path().join("frame.0120.exr")).unwrap();
+    let lit = (image.pixels.iter()).filter(|p| p.truncate().max_element() > 1e-3);
+    assert!(
+        lit.count() > image.pixels.len() / 2,
+        "the city fills the view"
+    );
+}
+
+#[test]
+fn bad_paths_stop_with_one_line_naming_the_file_and_fault() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = root().join("animations/study-box.gltf");
+    let cases = [
+        ("(waypoints: [(position: (0, 1, 5), yaw: 0)], duration: 2)", "at least two waypoints"),
+        (
+            "(waypoints: [(position: (0, 1, 5), yaw: 0, time: 1), (position: (1, 1, 5), yaw: 0, time: 1)])",
+            "times must increase",
+        ),
+        (
+            "(waypoints: [(position: (0, 1, 5), look_at: (0, 1, 5)), (position: (1, 1, 5), yaw: 0)], duration: 1)",
+            "look_at equals position",
+        ),
+        (
+            "(waypoints: [(position: (0, NaN, 5), yaw: 0), (position: (1, 1, 5), yaw: 0)], duration: 1)",
+            "not finite",
+        ),
+        (
+            "(waypoints: [(position: (0, 1, 5), yaw: 0), (position: (1, 1, 5), yaw: 0)], duration: 1, speed: 3)",
+            "speed",
+        ),
+    ];
+    for (index, (body, fault)) in cases.iter().enumerate() {
+        let file = dir.path().join(format!("bad-{index}.ron"));
+        std::fs::write(&file, body).unwrap();
+        let run = lmanim(&[text(&scene), "--camera-path", text(&file), "--no-cache"]);
+        assert_bad_input(&run, &format!("{}: ", file.display()));
+        assert_bad_input(&run, fault);
+    }
+    let run = lmanim(&[text(&scene), "--orbit", "0,0,0,0,1,5"]);
+    assert_bad_input(
+        &run,
+        "--orbit 0,0,0,0,1,5: RADIUS and SECONDS must be above 0",
+    );
+}
+
+#[test]
+fn a_moving_path_camera_drops_no_light_mesh_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let stats = dir.path().join("stats.json");
+    let run = lmanim(&[
+        text(&root().join("animations/study-box.gltf")),
+        "--orbit",
+        "0,0.5,0,4,2,1",
+        "--frames",
+        "0..4",
+        "--method",
+        "lmm",
+        "--width",
+        "32",
+        "--height",
+        "18",
+        "--no-cache",
+        "--quiet",
+        "--stats",
+        text(&stats),
+        "--out",
+        text(&dir.path().join("frame.####.exr")),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let stats: Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    let frames = stats["frames"].as_array().unwrap();
+    assert!(frames[0]["lightmesh"]["bits_computed"].as_u64().unwrap() > 0);
+    for frame in &frames[1..] {
+        assert_eq!(frame["camera_moved"], true, "{frame}");
+        assert_eq!(frame["copied"], false, "{frame}");
+        assert_eq!(frame["bits_invalidated"], 0, "{frame}");
+    }
+}
+
+/// `lmanim inspect`'s camera named `camera-path` at frames 0..=frames.
+fn inspected(scene: &Path, fps: f64, frames: u32) -> Vec<Value> {
+    let range = format!("0..={frames}");
+    let fps = fps.to_string();
+    let run = lmanim(&["inspect", text(scene), "--frames", &range, "--fps", &fps]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: Value = serde_json::from_slice(&run.stdout).unwrap();
+    (report["samples"].as_array().unwrap().iter())
+        .map(|sample| {
+            let cameras = sample["cameras"].as_array().unwrap();
+            let baked = cameras.iter().find(|c| c["name"] == "camera-path");
+            baked.expect("the baked camera").clone()
+        })
+        .collect()
+}
+
+fn vector(value: &Value) -> DVec3 {
+    let xyz: Vec<f64> = (value.as_array().unwrap().iter())
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    DVec3::new(xyz[0], xyz[1], xyz[2])
+}
+
+/// Bakes `path` into `scene` at `fps`, checks the validator's verdict and
+/// that inspect gives the path's poses at every frame time.
+fn check_bake(scene: &Path, path: &CameraPath, path_args: &[&str], fps: f64) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("elsewhere/with camera.gltf");
+    let fps_text = fps.to_string();
+    let mut args = vec!["bake-camera", text(scene)];
+    args.extend_from_slice(path_args);
+    args.extend_from_slice(&["--out", text(&out), "--fps", &fps_text]);
+    let run = lmanim(&args);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+
+    let report = node_support::khronos_report(&out);
+    assert_eq!(
+        report["issues"]["numErrors"].as_u64(),
+        Some(0),
+        "validator errors"
+    );
+
+    let frames = (path.end() * fps).ceil() as u32 + 2;
+    for (frame, camera) in inspected(&out, fps, frames).iter().enumerate() {
+        let pose = path.pose_at(frame as f64 / fps);
+        let position = vector(&camera["position"]);
+        let error = position.distance(pose.position);
+        assert!(
+            error < 1e-5,
+            "frame {frame}: {position} vs {} ({error} m)",
+            pose.position
+        );
+        let direction = vector(&camera["direction"]);
+        assert!(
+            direction.angle_between(pose.rotation * DVec3::NEG_Z) < 1e-5,
+            "frame {frame}"
+        );
+        let up = vector(&camera["up"]);
+        assert!(
+            up.angle_between(pose.rotation * DVec3::Y) < 1e-5,
+            "frame {frame}"
+        );
+        let yfov = camera["yfov"].as_f64().unwrap();
+        assert!(
+            (yfov - pose.yfov).abs() < 1e-6,
+            "frame {frame}: {yfov} vs {}",
+            pose.yfov
+        );
+    }
+}
+
+#[test]
+fn a_baked_flight_plays_back_as_the_spline_and_passes_the_validator() {
+    let scene = root().join("animations/study-box.gltf");
+    let path = CameraPath::load(&flight()).unwrap();
+    let zooms = path.pose_at(0.0).yfov != path.pose_at(10.0).yfov;
+    assert!(
+        zooms,
+        "the flight's field of view changes, so a pointer channel is baked"
+    );
+    check_bake(&scene, &path, &["--camera-path", text(&flight())], 24.0);
+}
+
+#[test]
+fn an_orbit_baked_from_a_scene_with_an_external_bin_stands_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("input/box.gltf");
+    let mut builder = GltfBuilder::new();
+    let cube = builder.add_geometry(&shapes::cuboid(Vec3::ONE)).unwrap();
+    let primitive = Primitive {
+        geometry: cube,
+        material: None,
+    };
+    let mesh = builder.add_mesh("Box", &[primitive]).unwrap();
+    let node = NodeDesc {
+        mesh: Some(mesh),
+        ..NodeDesc::named("Box")
+    };
+    builder.add_node(node).unwrap();
+    builder.write_gltf_with_bin(&scene).unwrap();
+    assert!(dir.path().join("input/box.bin").exists());
+
+    let orbit = "0,0,0,6,3,2.5";
+    let path = CameraPath::orbit(orbit).unwrap();
+    check_bake(&scene, &path, &["--orbit", orbit], 30.0);
+}
