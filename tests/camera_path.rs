@@ -3,7 +3,7 @@
 //! line naming the file and the fault; a moving path camera drops no
 //! light-mesh bit; and `bake-camera` writes a glTF the Khronos validator
 //! accepts, whose clip `lmanim inspect` plays back as the spline's poses,
-//! also from a scene whose buffer lies in an external `.bin`.
+//! also from scenes whose buffer lies in an external `.bin` or a `.glb`.
 //!
 //! The validator needs Node and npm (see `tests/node_support`).
 
@@ -231,9 +231,8 @@ fn a_baked_flight_plays_back_as_the_spline_and_passes_the_validator() {
 }
 
 #[test]
-fn an_orbit_baked_from_a_scene_with_an_external_bin_stands_alone() {
+fn orbits_baked_from_an_external_bin_and_a_glb_stand_alone() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("input/box.gltf");
     let mut builder = GltfBuilder::new();
     let cube = builder.add_geometry(&shapes::cuboid(Vec3::ONE)).unwrap();
     let primitive = Primitive {
@@ -246,10 +245,15 @@ fn an_orbit_baked_from_a_scene_with_an_external_bin_stands_alone() {
         ..NodeDesc::named("Box")
     };
     builder.add_node(node).unwrap();
-    builder.write_gltf_with_bin(&scene).unwrap();
+    let with_bin = dir.path().join("input/box.gltf");
+    builder.write_gltf_with_bin(&with_bin).unwrap();
     assert!(dir.path().join("input/box.bin").exists());
+    let glb = dir.path().join("input/box.glb");
+    builder.write_glb(&glb).unwrap();
 
     let orbit = "0,0,0,6,3,2.5";
     let path = CameraPath::orbit(orbit).unwrap();
-    check_bake(&scene, &path, &["--orbit", orbit], 30.0);
+    for scene in [with_bin, glb] {
+        check_bake(&scene, &path, &["--orbit", orbit], 30.0);
+    }
 }

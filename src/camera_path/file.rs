@@ -200,7 +200,7 @@ impl WaypointFile {
             }
             (None, Some(yaw), pitch) => {
                 let pitch = pitch.unwrap_or(0.0);
-                if !yaw.is_finite() || !(pitch.is_finite() && pitch.abs() <= 90.0) {
+                if !(yaw.is_finite() && pitch.is_finite() && pitch.abs() <= 90.0) {
                     return Err(format!(
                         "yaw {yaw} and pitch {pitch}: they must be finite, pitch within ±90 degrees"
                     ));
