@@ -1,5 +1,6 @@
 //! Camera paths end to end: the README's example flight over the city
-//! parses and renders; bad path files and `--orbit` values stop with one
+//! parses and renders; the frame loop places the path's camera at each
+//! frame's time; bad path files and `--orbit` values stop with one
 //! line naming the file and the fault; a moving path camera drops no
 //! light-mesh bit; and `bake-camera` writes a glTF the Khronos validator
 //! accepts, whose clip `lmanim inspect` plays back as the spline's poses,
@@ -15,6 +16,10 @@ use std::path::{Path, PathBuf};
 use common::cli::{assert_bad_input, lmanim};
 use glam::{DVec3, Vec3};
 use lmanim::camera_path::CameraPath;
+use lmanim::plan::Plan;
+use lmanim::sequence::Sequence;
+use lmanim::settings::Settings;
+use lmanim::stats::FrameStats;
 use lmanim_authoring::{shapes, GltfBuilder, NodeDesc, Primitive};
 use serde_json::Value;
 
@@ -62,6 +67,37 @@ fn the_city_flight_parses_and_renders_a_small_frame() {
         lit.count() > image.pixels.len() / 2,
         "the city fills the view"
     );
+}
+
+#[test]
+fn every_frame_is_seen_from_the_path_at_its_time() {
+    let scene_file = root().join("animations/study-box.gltf");
+    let mut sequence = Sequence::load(&scene_file).unwrap();
+    let anchor = Plan::anchor(sequence.scene());
+    let path = CameraPath::load(&flight()).unwrap();
+    let settings = Settings {
+        camera_path: Some(path.clone()),
+        ..Settings::default()
+    };
+    for frame in [0, 7, 100, 239, 300] {
+        let time = frame as f64 / settings.fps;
+        let placed = sequence
+            .advance(time, &settings, &mut FrameStats::default())
+            .unwrap();
+        let pose = path.pose_at(time);
+        let origin = (pose.position - anchor).as_vec3();
+        assert!(
+            placed.camera.origin.abs_diff_eq(origin, 1e-4),
+            "frame {frame}"
+        );
+        let backward = (pose.rotation * DVec3::Z).as_vec3();
+        assert!(
+            placed.camera.backward.abs_diff_eq(backward, 1e-6),
+            "frame {frame}"
+        );
+        assert_eq!(placed.camera.projection, pose.projection());
+        assert!(!placed.automatic_camera);
+    }
 }
 
 #[test]
