@@ -12,9 +12,10 @@ use super::spline::Ease;
 /// a normal lens (about 43 mm on a full-frame camera).
 pub const DEFAULT_FOV: f64 = 45.0;
 
-/// A camera-path file.
+/// A camera-path file. (The serde names are those a user's error
+/// messages show.)
 #[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, rename = "path")]
 pub struct PathFile {
     pub waypoints: Vec<WaypointFile>,
     /// Seconds from the first waypoint to the last, when the last has no
@@ -39,7 +40,7 @@ fn default_fov() -> f64 {
 /// One waypoint: where the camera is and where it looks, either at a
 /// point or by yaw and pitch.
 #[derive(Clone, Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, rename = "waypoint")]
 pub struct WaypointFile {
     pub position: [f64; 3],
     #[serde(default)]

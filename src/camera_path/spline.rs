@@ -179,7 +179,7 @@ impl ArcTable {
 
 /// How the path's clock runs from its first waypoint's time to its last's.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[serde(rename_all = "snake_case", rename = "ease")]
 pub enum Ease {
     /// At the waypoints' own pace.
     #[default]
