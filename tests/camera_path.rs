@@ -3,8 +3,9 @@
 //! frame's time; bad path files and `--orbit` values stop with one
 //! line naming the file and the fault; a moving path camera drops no
 //! light-mesh bit; and `bake-camera` writes a glTF the Khronos validator
-//! accepts, whose clip `lmanim inspect` plays back as the spline's poses,
-//! also from scenes whose buffer lies in an external `.bin` or a `.glb`.
+//! accepts, whose clip `lmanim inspect` plays back as the spline's poses
+//! and lmanim renders as it renders the path, also from scenes whose
+//! buffer lies in an external `.bin` or a `.glb`.
 //!
 //! The validator needs Node and npm (see `tests/node_support`).
 
@@ -264,6 +265,68 @@ fn a_baked_flight_plays_back_as_the_spline_and_passes_the_validator() {
         "the flight's field of view changes, so a pointer channel is baked"
     );
     check_bake(&scene, &path, &["--camera-path", text(&flight())], 24.0);
+}
+
+/// Renders frame 30 of `scene` at 64×36 with `flags`, returning its image.
+fn render_frame_30(scene: &Path, flags: &[&str], out: &Path) -> lmanim::output::Image {
+    let pattern = out.join("frame.####.exr");
+    let mut args = vec![
+        text(scene),
+        "--frames",
+        "30",
+        "--width",
+        "64",
+        "--height",
+        "36",
+    ];
+    args.extend_from_slice(flags);
+    args.extend_from_slice(&["--no-cache", "--quiet", "--out", text(&pattern)]);
+    let run = lmanim(&args);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    lmanim::output::read_exr(&out.join("frame.0030.exr")).unwrap()
+}
+
+#[test]
+fn lmanim_renders_the_baked_camera_as_it_renders_the_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = root().join("animations/study-box.gltf");
+    let orbit = ["--orbit", "0,0.5,0,4,2,2"];
+    let baked = dir.path().join("baked.gltf");
+    let run = lmanim(&[
+        "bake-camera",
+        text(&scene),
+        orbit[0],
+        orbit[1],
+        "--out",
+        text(&baked),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let flown = render_frame_30(&scene, &orbit, &dir.path().join("flown"));
+    let played = render_frame_30(
+        &baked,
+        &["--camera", "camera-path"],
+        &dir.path().join("played"),
+    );
+    let lit = (flown.pixels.iter()).filter(|p| p.truncate().max_element() > 1e-3);
+    assert!(lit.count() > flown.pixels.len() / 10, "the box is in view");
+    // The baked camera is the path's pose rounded to f32: a pixel whose
+    // centre lies on an edge may fall the other way, no more.
+    let differing = (flown.pixels.iter().zip(&played.pixels))
+        .filter(|(a, b)| (**a - **b).abs().max_element() > 1e-3)
+        .count();
+    println!("{differing} of {} pixels differ", flown.pixels.len());
+    assert!(
+        differing <= flown.pixels.len() / 100,
+        "{differing} pixels differ"
+    );
 }
 
 #[test]
