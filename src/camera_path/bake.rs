@@ -10,7 +10,6 @@
 //! KHR_animation_pointer. The input's buffers and images are embedded
 //! (`import::self_contained_json`), so the output stands alone anywhere.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use base64::Engine;
@@ -55,11 +54,10 @@ pub fn bake(scene: &Path, path: &CameraPath, fps: f64, out: &Path) -> Result<Str
     let mut json = import::self_contained_json(scene)?;
     let name = unique_name(&json);
     add_camera(&mut json, &Keys::sample(path, fps), &name);
-    let bytes = serde_json::to_vec(&json).expect("a JSON value serialises");
     output::write_atomically(out, |file| {
-        file.write_all(&bytes).map_err(|source| OutputError::Write {
+        serde_json::to_writer(file, &json).map_err(|error| OutputError::Write {
             path: out.to_path_buf(),
-            source,
+            source: error.into(),
         })
     })?;
     Ok(name)
