@@ -1,5 +1,5 @@
 //! Camera paths end to end: the README's example flight over the city
-//! parses and renders; the frame loop places the path's camera at each
+//! is the file in `animations/`, parses and renders; the frame loop places the path's camera at each
 //! frame's time; bad path files and `--orbit` values stop with one
 //! line naming the file and the fault; a moving path camera drops no
 //! light-mesh bit; and `bake-camera` writes a glTF the Khronos validator
@@ -36,11 +36,23 @@ fn text(path: &Path) -> &str {
     path.to_str().expect("UTF-8 path")
 }
 
+/// The path file the README's "Camera paths" section shows.
+fn readme_path(dir: &Path) -> CameraPath {
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let section = &readme[readme.find("### Camera paths").unwrap()..];
+    let block = section.split("```ron\n").nth(1).unwrap();
+    let block = &block[..block.find("```").unwrap()];
+    let file = dir.join("readme.ron");
+    std::fs::write(&file, block).unwrap();
+    CameraPath::load(&file).unwrap()
+}
+
 #[test]
 fn the_city_flight_parses_and_renders_a_small_frame() {
     let path = CameraPath::load(&flight()).unwrap();
     assert_eq!((path.start(), path.end()), (0.0, 10.0));
     let dir = tempfile::tempdir().unwrap();
+    assert!(readme_path(dir.path()) == path, "the README shows the file");
     let out = dir.path().join("frame.####.exr");
     let run = lmanim(&[
         text(&root().join("animations/city.gltf")),
