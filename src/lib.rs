@@ -6,6 +6,7 @@ pub mod accel;
 pub mod anim;
 pub mod backend;
 pub mod bits;
+pub mod camera_path;
 pub mod import;
 pub mod lightmesh;
 pub mod output;

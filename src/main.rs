@@ -3,9 +3,10 @@
 //!
 //! `lmanim SCENE [flags]` renders; `lmanim inspect SCENE [flags]` prints the
 //! animation's poses as JSON instead; `lmanim study SCENE --out DIR`
-//! measures what each method's accuracy costs in time on one frame. (A
-//! scene file literally named `inspect` or `study` is rendered as
-//! `lmanim ./inspect`.)
+//! measures what each method's accuracy costs in time on one frame;
+//! `lmanim bake-camera SCENE --camera-path PATH.ron --out OUT.gltf` writes
+//! the scene with a camera path as a glTF camera and clip. (A scene file
+//! literally named `inspect` or `study` is rendered as `lmanim ./inspect`.)
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -17,6 +18,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use lmanim::anim::inspect::inspect;
 use lmanim::anim::ClipSelection;
+use lmanim::camera_path::{bake, CameraPath};
 use lmanim::import;
 use lmanim::lightmesh::kernel::Kernel;
 use lmanim::lightmesh::penumbra::Penumbra;
@@ -64,6 +66,33 @@ enum Command {
     /// secondary rays, the frames copied and the work per frame. Takes a
     /// render's arguments.
     Plan(PlanArgs),
+    /// Write the scene with a camera path (--camera-path or --orbit) as an
+    /// ordinary glTF camera node and animation clip, keyed at every frame,
+    /// so other players show the same shot.
+    BakeCamera(BakeArgs),
+}
+
+#[derive(Debug, Args)]
+struct BakeArgs {
+    /// The scene: a .gltf or .glb file.
+    scene: PathBuf,
+    /// The camera path to bake (as for rendering).
+    #[arg(long, value_name = "PATH.ron", conflicts_with = "orbit")]
+    camera_path: Option<PathBuf>,
+    /// The turntable to bake (as for rendering).
+    #[arg(
+        long,
+        value_name = "X,Y,Z,RADIUS,HEIGHT,SECONDS",
+        allow_hyphen_values = true
+    )]
+    orbit: Option<String>,
+    /// The .gltf file to write (buffers and images embedded).
+    #[arg(long, value_name = "OUT.gltf")]
+    out: PathBuf,
+    /// Frames per second of the keys [default: the scene's settings
+    /// file's, or 24].
+    #[arg(long)]
+    fps: Option<f64>,
 }
 
 #[derive(Debug, Args)]
@@ -179,8 +208,22 @@ struct RenderArgs {
     #[arg(long)]
     clip: Option<String>,
     /// Render through the camera with this name (default: the first).
-    #[arg(long)]
+    #[arg(long, conflicts_with_all = ["camera_path", "orbit"])]
     camera: Option<String>,
+    // Not a flattened struct shared with `BakeArgs`: clap leaves an
+    // optional flattened `RenderArgs` with a flattened field unmatched.
+    /// Fly the camera along this path (RON: waypoints, field of view,
+    /// ease; see README, "Camera paths") instead of the scene's cameras.
+    #[arg(long, value_name = "PATH.ron", conflicts_with = "orbit")]
+    camera_path: Option<PathBuf>,
+    /// Turntable: one turn around the point X,Y,Z at RADIUS metres,
+    /// HEIGHT metres above it, looking at it, in SECONDS.
+    #[arg(
+        long,
+        value_name = "X,Y,Z,RADIUS,HEIGHT,SECONDS",
+        allow_hyphen_values = true
+    )]
+    orbit: Option<String>,
     /// Render settings in RON; flags override it. Default: SCENE with the
     /// extension .ron, when that file exists.
     #[arg(long)]
@@ -307,6 +350,10 @@ fn main() -> ExitCode {
         (Some(Command::Plan(args)), _) => {
             init_logging(args.render.quiet);
             run_plan(args)
+        }
+        (Some(Command::BakeCamera(args)), _) => {
+            init_logging(false);
+            run_bake(args)
         }
         (None, Some(render)) => {
             init_logging(render.quiet);
@@ -547,6 +594,8 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     settings.spp = flags.spp.unwrap_or(settings.spp);
     settings.threads = flags.threads.or(settings.threads);
     settings.camera = flags.camera.clone().or(settings.camera);
+    settings.camera_path =
+        camera_path(flags.camera_path.as_deref(), flags.orbit.as_deref())?.or(settings.camera_path);
     settings.clip = flags.clip.clone().or(settings.clip);
     settings.out = flags.out.clone().or(settings.out);
     settings.png |= flags.png;
@@ -666,7 +715,7 @@ fn run_inspect(args: &InspectArgs) -> Result<(), Failure> {
             let frames = FrameSet::parse(text)
                 .map_err(|fault| Failure::bad_input(anyhow::anyhow!("--frames {text}: {fault}")))?;
             let timeline = Timeline {
-                fps: inspect_fps(args)?,
+                fps: scene_fps(&args.scene, args.fps)?,
             };
             frames
                 .frames()
@@ -725,11 +774,42 @@ fn parse_times(text: &str) -> Result<Vec<f64>, String> {
         .collect()
 }
 
-/// --fps, else the fps of the scene's sibling settings file, else the
-/// default: the same frame times a render of the scene would use.
-fn inspect_fps(args: &InspectArgs) -> Result<f64, Failure> {
-    let sibling = args.scene.with_extension("ron");
-    let fps = match args.fps {
+/// `lmanim bake-camera`: the scene with the path's camera to --out.
+fn run_bake(args: &BakeArgs) -> Result<(), Failure> {
+    let path = camera_path(args.camera_path.as_deref(), args.orbit.as_deref())?;
+    let path = path.ok_or_else(|| {
+        Failure::bad_input(anyhow::anyhow!(
+            "bake-camera needs a path: --camera-path PATH.ron or --orbit"
+        ))
+    })?;
+    let fps = scene_fps(&args.scene, args.fps)?;
+    let name = bake::bake(&args.scene, &path, fps, &args.out).map_err(|error| Failure {
+        bad_input: error.is_bad_input(),
+        error: error.into(),
+    })?;
+    eprintln!(
+        "baked camera '{name}' to {} (render it with --camera {name})",
+        args.out.display()
+    );
+    Ok(())
+}
+
+/// The camera path of `--camera-path FILE` or `--orbit TEXT`, if either.
+fn camera_path(file: Option<&Path>, orbit: Option<&str>) -> Result<Option<CameraPath>, Failure> {
+    let path = match (file, orbit) {
+        (Some(file), _) => CameraPath::load(file),
+        (None, Some(text)) => CameraPath::orbit(text),
+        (None, None) => return Ok(None),
+    };
+    path.map(Some).map_err(Failure::bad_input)
+}
+
+/// `fps` (the --fps flag), else the fps of the scene's sibling settings
+/// file, else the default: the same frame times a render of the scene
+/// would use.
+fn scene_fps(scene: &Path, fps: Option<f64>) -> Result<f64, Failure> {
+    let sibling = scene.with_extension("ron");
+    let fps = match fps {
         Some(fps) => fps,
         None if sibling.is_file() => Settings::load(&sibling).map_err(Failure::bad_input)?.fps,
         None => Settings::default().fps,

@@ -280,10 +280,7 @@ impl Sequence {
         settings: &Settings,
         stats: &mut FrameStats,
     ) -> Result<FrameScene, RunError> {
-        let camera = match &settings.camera {
-            Some(name) => CameraChoice::Named(name),
-            None => CameraChoice::First,
-        };
+        let camera = CameraChoice::for_frame(settings, time);
         let pose = Pose::at(&self.scene, self.clips, time);
         let lamps = &settings.lamps;
         let mut placed = FrameScene::place(

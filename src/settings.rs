@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
+use crate::camera_path::CameraPath;
 use crate::lightmesh::kernel::Kernel;
 use crate::lightmesh::lattice::MAX_KI;
 use crate::lightmesh::penumbra::Penumbra;
@@ -108,6 +109,11 @@ pub struct Settings {
     pub cache_dir: Option<String>,
     pub lamps: LampSettings,
     pub lightmesh: LightMeshSettings,
+    /// The camera path flown instead of the scene's cameras
+    /// (`--camera-path`, `--orbit`). Not a settings-file field: a path is
+    /// a file of its own, checked when it is read.
+    #[serde(skip)]
+    pub camera_path: Option<CameraPath>,
 }
 
 impl Default for Settings {
@@ -141,6 +147,7 @@ impl Default for Settings {
             cache_dir: Some("cache".into()),
             lamps: LampSettings::default(),
             lightmesh: LightMeshSettings::default(),
+            camera_path: None,
         }
     }
 }

@@ -49,6 +49,7 @@ mod buffers;
 mod camera;
 mod channel_targets;
 mod container;
+mod embed;
 mod error;
 mod lights;
 mod material;
@@ -67,6 +68,7 @@ mod uri;
 use std::path::Path;
 
 pub use container::SUPPORTED_EXTENSIONS;
+pub use embed::self_contained_json;
 pub use error::{Fault, ImportError};
 
 use crate::scene::SceneDesc;

@@ -123,14 +123,12 @@ impl Plan {
     ) -> Result<Plan, PlaceError> {
         let anchor = Plan::anchor(scene);
         let timeline = Timeline { fps: settings.fps };
-        let camera = match &settings.camera {
-            Some(name) => CameraChoice::Named(name),
-            None => CameraChoice::First,
-        };
         let every_mover = dynamic_nodes(scene);
         let placed = (frames.frames().iter())
             .map(|&frame| {
-                let pose = Pose::at(scene, clips, timeline.time_of(frame));
+                let time = timeline.time_of(frame);
+                let pose = Pose::at(scene, clips, time);
+                let camera = CameraChoice::for_frame(settings, time);
                 FrameScene::place(scene, &pose, anchor, camera, &settings.lamps, &every_mover)
             })
             .collect::<Result<Vec<_>, _>>()?;

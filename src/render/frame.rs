@@ -17,7 +17,7 @@ use crate::anim::deform::{deformed_mesh, DeformedMesh};
 use crate::scene::pose::dynamic_nodes;
 use crate::scene::pose::Pose;
 use crate::scene::{Light, Material, Projection, SceneDesc};
-use crate::settings::LampSettings;
+use crate::settings::{LampSettings, Settings};
 
 /// A mesh instance: one node that carries a mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -86,6 +86,30 @@ impl SceneBounds {
 pub enum CameraChoice<'a> {
     First,
     Named(&'a str),
+    /// A camera of no scene node: a camera path's pose at the frame's
+    /// time, given by its world transform.
+    Placed {
+        world: DMat4,
+        projection: Projection,
+    },
+}
+
+impl CameraChoice<'_> {
+    /// The camera `settings` ask for at `time` seconds: the camera path's
+    /// pose where there is one, else the named camera or the first.
+    pub fn for_frame(settings: &Settings, time: f64) -> CameraChoice<'_> {
+        match (&settings.camera_path, &settings.camera) {
+            (Some(path), _) => {
+                let pose = path.pose_at(time);
+                CameraChoice::Placed {
+                    world: pose.world(),
+                    projection: pose.projection(),
+                }
+            }
+            (None, Some(name)) => CameraChoice::Named(name),
+            (None, None) => CameraChoice::First,
+        }
+    }
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -210,6 +234,9 @@ fn place_camera(
     let name = match choice {
         CameraChoice::First => None,
         CameraChoice::Named(name) => Some(name),
+        CameraChoice::Placed { world, projection } => {
+            return Ok(Some(render_camera(world, projection, anchor)))
+        }
     };
     let Some(node) = scene.camera_node(name) else {
         return match name {
@@ -224,16 +251,20 @@ fn place_camera(
         };
     };
     let projection = pose.properties.cameras[scene.nodes[node].camera.unwrap_or_default()];
-    let world = pose.world[node];
+    Ok(Some(render_camera(pose.world[node], projection, anchor)))
+}
+
+/// A camera whose node has the world transform `world`, in render space.
+fn render_camera(world: DMat4, projection: Projection, anchor: DVec3) -> RenderCamera {
     let axis =
         |v: DVec3, fallback: DVec3| world.transform_vector3(v).normalize_or(fallback).as_vec3();
-    Ok(Some(RenderCamera {
+    RenderCamera {
         origin: (world.transform_point3(DVec3::ZERO) - anchor).as_vec3(),
         right: axis(DVec3::X, DVec3::X),
         up: axis(DVec3::Y, DVec3::Y),
         backward: axis(DVec3::Z, DVec3::Z),
         projection,
-    }))
+    }
 }
 
 /// A perspective camera that sees the whole scene from above and to the
