@@ -89,8 +89,8 @@ struct BakeArgs {
     /// The .gltf file to write (buffers and images embedded).
     #[arg(long, value_name = "OUT.gltf")]
     out: PathBuf,
-    /// Frames per second of the keys [default: the scene's settings
-    /// file's, or 24].
+    /// Frames per second of the keys (by default the scene's settings
+    /// file's, or 24 without one).
     #[arg(long)]
     fps: Option<f64>,
 }
@@ -388,7 +388,7 @@ fn command() -> clap::Command {
         })
     };
     let mut command = documented(Cli::command());
-    for name in ["warm", "plan", "study", "inspect"] {
+    for name in ["warm", "plan", "study", "inspect", "bake-camera"] {
         command = command.mut_subcommand(name, documented);
     }
     command
