@@ -13,6 +13,9 @@
 //! `lmm1` and `auto`; some lights have a short range, so the plan switches
 //! them off in some runs' frames and not in others.
 //!
+//! Beside reuse, the same generated shots check the backends' parity:
+//! every frame on the GPU is the CPU's, bit for bit.
+//!
 //! CI runs a fixed set of cases ([`config`]); `LMANIM_REUSE_CASES=N`
 //! runs more (BENCHMARKS.md, "Reuse property"). A failing case is shrunk
 //! and kept in `reuse_property.proptest-regressions`, which proptest
@@ -476,6 +479,55 @@ fn every_frame_equals_its_cold_render_on_the_gpu() {
             &mut gpu.borrow_mut(),
         );
         prop_assert!(fault.is_none(), "{}", fault.unwrap_or_default());
+        Ok(())
+    });
+    if let Err(failure) = result {
+        panic!("{failure}");
+    }
+}
+
+/// The backend-parity invariant over the same generated shots: where the
+/// adapter rounds as the CPU does, every frame of a shot rendered on the
+/// GPU is the CPU's, bit for bit.
+#[test]
+fn every_frame_on_the_gpu_is_the_cpus() {
+    let Some((gpu, exact)) = common::gpu::backend_to_compare() else {
+        return;
+    };
+    if !exact {
+        eprintln!("skipped: the adapter does not round as the CPU does");
+        return;
+    }
+    let gpu = std::cell::RefCell::new(gpu);
+    let mut cpu = Backend::new(BackendKind::Cpu, Some(2)).unwrap();
+    let cpu = std::cell::RefCell::new(&mut cpu);
+    let mut runner = TestRunner::new(ProptestConfig {
+        failure_persistence: None,
+        ..config(3)
+    });
+    let result = runner.run(&case(), |case| {
+        let scene = case.scene();
+        let shot: Vec<u32> = (0..case.frames).collect();
+        let on_cpu = run(
+            &scene,
+            &case.settings(BackendKind::Cpu),
+            &shot,
+            None,
+            &mut cpu.borrow_mut(),
+        );
+        let on_gpu = run(
+            &scene,
+            &case.settings(BackendKind::Gpu),
+            &shot,
+            None,
+            &mut gpu.borrow_mut(),
+        );
+        for (frame, (cpu, gpu)) in on_cpu.iter().zip(&on_gpu).enumerate() {
+            prop_assert!(
+                cpu == gpu,
+                "frame {frame}: the GPU's differs from the CPU's"
+            );
+        }
         Ok(())
     });
     if let Err(failure) = result {
