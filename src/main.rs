@@ -596,6 +596,15 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     settings.camera = flags.camera.clone().or(settings.camera);
     settings.camera_path =
         camera_path(flags.camera_path.as_deref(), flags.orbit.as_deref())?.or(settings.camera_path);
+    if settings.camera_path.is_some() {
+        // The flags refuse both at once; a settings file's camera (the
+        // city's "flythrough") gives way to the path, and says so.
+        if let Some(name) = settings.camera.take() {
+            log::warn!(
+                "the settings' camera '{name}' is not used: the camera path flies the camera"
+            );
+        }
+    }
     settings.clip = flags.clip.clone().or(settings.clip);
     settings.out = flags.out.clone().or(settings.out);
     settings.png |= flags.png;
