@@ -174,18 +174,13 @@ fn roots(document: &gltf::Document, parents: &[Option<usize>]) -> Result<Vec<usi
 /// move nothing.
 pub fn mark_motion(nodes: &mut [Node], clips: &[AnimationClip]) {
     for channel in clips.iter().flat_map(|clip| &clip.channels) {
-        match channel.target {
-            Target::Translation(node) | Target::Rotation(node) | Target::Scale(node) => {
-                if let Some(node) = nodes.get_mut(node) {
-                    node.animated = true;
-                }
+        if let Some(node) = channel.target.placed_node().and_then(|n| nodes.get_mut(n)) {
+            node.animated = true;
+        }
+        if let Target::Weights(node) = channel.target {
+            if let Some(node) = nodes.get_mut(node) {
+                node.deforms = true;
             }
-            Target::Weights(node) => {
-                if let Some(node) = nodes.get_mut(node) {
-                    node.deforms = true;
-                }
-            }
-            Target::Light(..) | Target::Camera(..) | Target::Material(..) => {}
         }
     }
 }

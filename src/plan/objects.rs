@@ -14,7 +14,6 @@ use serde::Serialize;
 use super::report::frame_ranges;
 use super::PlannedFrames;
 use crate::anim::pose::ClipSelection;
-use crate::scene::animation::Target;
 use crate::scene::pose::dynamic_nodes_where;
 use crate::scene::SceneDesc;
 
@@ -71,9 +70,7 @@ pub fn plan(scene: &SceneDesc, clips: ClipSelection, planned: &PlannedFrames) ->
 fn animated_by(scene: &SceneDesc, clips: ClipSelection) -> Vec<bool> {
     let mut moved = vec![false; scene.nodes.len()];
     for channel in clips.clips(scene).flat_map(|clip| &clip.channels) {
-        if let Target::Translation(node) | Target::Rotation(node) | Target::Scale(node) =
-            channel.target
-        {
+        if let Some(node) = channel.target.placed_node() {
             moved[node] = true;
         }
     }

@@ -96,6 +96,17 @@ impl Target {
         }
     }
 
+    /// The node whose placement the channel moves (its translation,
+    /// rotation or scale: it and its subtree move); None for morph
+    /// weights, which deform a mesh in place, and for lights, cameras and
+    /// materials.
+    pub fn placed_node(self) -> Option<usize> {
+        match self {
+            Target::Translation(node) | Target::Rotation(node) | Target::Scale(node) => Some(node),
+            _ => None,
+        }
+    }
+
     /// Components per value. Morph weights have one per morph target of
     /// the node's mesh, which `morph_targets(node)` tells.
     pub fn width(self, morph_targets: impl FnOnce(usize) -> usize) -> usize {
