@@ -10,7 +10,7 @@ use lmanim::backend::Backend;
 use lmanim::output::{Image, RenderedFrame};
 use lmanim::plan::{Plan, Shadows};
 use lmanim::scene::animation::AnimationClip;
-use lmanim::scene::{LightKind, Material, Projection, SceneDesc};
+use lmanim::scene::{LightKind, Material, SceneDesc};
 use lmanim::schedule::{FrameSet, Timeline};
 use lmanim::sequence::Sequence;
 use lmanim::settings::{Aov, BackendKind, Method, Settings};
@@ -21,12 +21,7 @@ use common::*;
 fn camera_over(scene: &mut SceneDesc) {
     add_camera(
         scene,
-        Projection::Perspective {
-            yfov: 0.9,
-            aspect_ratio: None,
-            znear: 0.1,
-            zfar: None,
-        },
+        perspective(0.9),
         look_at(DVec3::new(-3.0, 5.0, 6.0), DVec3::ZERO),
     );
 }
@@ -94,13 +89,6 @@ fn base_settings(method: Method) -> Settings {
     settings
 }
 
-fn planned(scene: SceneDesc, settings: &Settings, frames: &str) -> Sequence {
-    let frames = FrameSet::parse(frames).unwrap();
-    let plan = Plan::make(&scene, settings, ClipSelection::All, &frames).unwrap();
-    let first = Timeline { fps: settings.fps }.time_of(frames.frames()[0]);
-    Sequence::planned(scene, "test".into(), ClipSelection::All, first, plan).unwrap()
-}
-
 /// Renders `frames` of a planned sequence.
 fn render_frames(
     mut sequence: Sequence,
@@ -124,7 +112,7 @@ fn render_frames(
 }
 
 fn render_one(scene: SceneDesc, settings: &Settings) -> (Image, FrameStats) {
-    let sequence = planned(scene, settings, "0");
+    let sequence = planned(&scene, settings, "0");
     let (frame, stats) = render_frames(sequence, settings, &[0]).remove(0);
     (frame.image, stats)
 }
@@ -319,14 +307,14 @@ fn an_object_animated_outside_the_planned_frames_is_dynamic_and_shares_the_cache
             })
             .count()
     };
-    let mut sequence = planned(yard_with_a_late_car(), &settings, "0..4");
+    let mut sequence = planned(&yard_with_a_late_car(), &settings, "0..4");
     sequence.set_cache_dir(Some(cache.path().to_owned()));
     render_frames(sequence, &settings, &[0]).remove(0);
     assert_eq!(files(), 0, "saved at the end of a run only");
 
     let mut backend = Backend::new(BackendKind::Cpu, Some(2)).unwrap();
     for frames in ["0..4", "0..96"] {
-        let mut sequence = planned(yard_with_a_late_car(), &settings, frames);
+        let mut sequence = planned(&yard_with_a_late_car(), &settings, frames);
         sequence.set_cache_dir(Some(cache.path().to_owned()));
         let placed = sequence
             .advance(0.0, &settings, &mut FrameStats::default())
@@ -345,12 +333,12 @@ fn a_chunk_that_shows_the_object_still_renders_the_bits_of_the_whole_shot() {
         let settings = base_settings(method);
         let frames = [0, 1, 2, 3];
         let in_chunk = render_frames(
-            planned(yard_with_a_late_car(), &settings, "0..4"),
+            planned(&yard_with_a_late_car(), &settings, "0..4"),
             &settings,
             &frames,
         );
         let in_shot = render_frames(
-            planned(yard_with_a_late_car(), &settings, "0..96"),
+            planned(&yard_with_a_late_car(), &settings, "0..96"),
             &settings,
             &frames,
         );
@@ -365,7 +353,7 @@ fn auto_is_whitted_for_the_hard_light_and_lmm1_for_the_soft_one() {
     let layers = |method| {
         let mut settings = base_settings(method);
         settings.aovs = vec![Aov::Light];
-        let sequence = planned(yard(), &settings, "0");
+        let sequence = planned(&yard(), &settings, "0");
         let (frame, stats) = render_frames(sequence, &settings, &[0]).remove(0);
         let layer = |name: &str| {
             (frame.aovs.iter())
@@ -455,14 +443,14 @@ fn the_gpu_follows_the_plan() {
         settings
     };
     let on_gpu = |gpu: &mut Backend, scene: SceneDesc, settings: &Settings| {
-        let mut sequence = planned(scene, settings, "0");
+        let mut sequence = planned(&scene, settings, "0");
         let mut stats = FrameStats::default();
         let placed = sequence.advance(0.0, settings, &mut stats).unwrap();
         let frame = (sequence.render_frame(gpu, &placed, settings, &mut stats)).unwrap();
         (frame, stats)
     };
     let on_cpu = |scene: SceneDesc, settings: &Settings| {
-        render_frames(planned(scene, settings, "0"), settings, &[0]).remove(0)
+        render_frames(planned(&scene, settings, "0"), settings, &[0]).remove(0)
     };
     // Hard lights and lights that reach nothing: formula (1) alone.
     let mut hard_only = yard_with_useless_lights();

@@ -10,7 +10,7 @@ mod common;
 use common::*;
 use glam::{DMat4, DVec3, Vec3};
 
-use lmanim::scene::{LightKind, Projection, SceneDesc};
+use lmanim::scene::{LightKind, SceneDesc};
 use lmanim::sequence::Sequence;
 use lmanim::settings::{Method, Settings};
 use lmanim::stats::FrameStats;
@@ -40,12 +40,7 @@ fn box_on_a_floor(seconds: f32) -> SceneDesc {
     );
     let camera = add_camera(
         &mut scene,
-        Projection::Perspective {
-            yfov: 0.9,
-            aspect_ratio: None,
-            znear: 0.1,
-            zfar: None,
-        },
+        perspective(0.9),
         look_at(DVec3::new(0.0, 6.0, 6.0), DVec3::ZERO),
     );
     let dolly = linear_translation(

@@ -15,7 +15,7 @@ use glam::{DMat4, DVec3, Vec3};
 use lmanim::lightmesh::cache::{CacheKey, StaticMaskCache};
 use lmanim::output::Image;
 use lmanim::scene::animation::AnimationClip;
-use lmanim::scene::{LightKind, Projection, SceneDesc};
+use lmanim::scene::{LightKind, SceneDesc};
 use lmanim::sequence::Sequence;
 use lmanim::settings::{Method, Settings};
 use lmanim::stats::FrameStats;
@@ -52,12 +52,7 @@ fn yard(wall_x: f32, lamp_moves: bool) -> SceneDesc {
     );
     let camera = add_camera(
         &mut scene,
-        Projection::Perspective {
-            yfov: 0.9,
-            aspect_ratio: None,
-            znear: 0.1,
-            zfar: None,
-        },
+        perspective(0.9),
         look_at(DVec3::new(-6.0, 5.0, 8.0), DVec3::new(2.0, 0.0, 0.0)),
     );
     for light in &mut scene.lights {

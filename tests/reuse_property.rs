@@ -31,16 +31,13 @@ use glam::{DMat4, DVec3, Vec3};
 use proptest::prelude::*;
 use proptest::test_runner::{RngSeed, TestRunner};
 
-use lmanim::anim::pose::ClipSelection;
 use lmanim::backend::Backend;
 use lmanim::lightmesh::kernel::Kernel;
 use lmanim::lightmesh::penumbra::Penumbra;
 use lmanim::output::Image;
-use lmanim::plan::Plan;
 use lmanim::scene::animation::AnimationClip;
-use lmanim::scene::{LightKind, Projection, SceneDesc};
-use lmanim::schedule::{FrameSet, Timeline};
-use lmanim::sequence::Sequence;
+use lmanim::scene::{LightKind, SceneDesc};
+use lmanim::schedule::Timeline;
 use lmanim::settings::{BackendKind, Method, Settings};
 use lmanim::stats::FrameStats;
 
@@ -212,16 +209,7 @@ impl Case {
         }
         let (sin, cos) = self.camera_azimuth.sin_cos();
         let eye = DVec3::new(12.0 * sin, 9.0, 12.0 * cos);
-        add_camera(
-            &mut scene,
-            Projection::Perspective {
-                yfov: 0.9,
-                aspect_ratio: None,
-                znear: 0.1,
-                zfar: None,
-            },
-            look_at(eye, DVec3::ZERO),
-        );
+        add_camera(&mut scene, perspective(0.9), look_at(eye, DVec3::ZERO));
         scene.animations.push(AnimationClip {
             name: Some("traffic".into()),
             channels,
@@ -265,7 +253,7 @@ fn run(
     cache: Option<&Path>,
     backend: &mut Backend,
 ) -> Vec<Image> {
-    let mut sequence = planned(scene, settings, frames);
+    let mut sequence = planned(scene, settings, &frame_list(frames));
     sequence.set_cache_dir(cache.map(Path::to_owned));
     let timeline = Timeline { fps: settings.fps };
     let images = (frames.iter())
@@ -288,7 +276,7 @@ fn warm(
     cache: &Path,
     backend: &mut Backend,
 ) {
-    let mut sequence = planned(scene, settings, frames);
+    let mut sequence = planned(scene, settings, &frame_list(frames));
     sequence.set_cache_dir(Some(cache.to_owned()));
     let timeline = Timeline { fps: settings.fps };
     for &frame in frames {
@@ -301,21 +289,11 @@ fn warm(
     sequence.save_cache().unwrap();
 }
 
-fn planned(scene: &SceneDesc, settings: &Settings, frames: &[u32]) -> Sequence {
-    let text = (frames.iter().map(u32::to_string))
+/// `frames` as `--frames` takes a list (`0,1,2`).
+fn frame_list(frames: &[u32]) -> String {
+    (frames.iter().map(u32::to_string))
         .collect::<Vec<_>>()
-        .join(",");
-    let frames = FrameSet::parse(&text).unwrap();
-    let plan = Plan::make(scene, settings, ClipSelection::All, &frames).unwrap();
-    let first = Timeline { fps: settings.fps }.time_of(frames.frames()[0]);
-    Sequence::planned(
-        scene.clone(),
-        "generated".into(),
-        ClipSelection::All,
-        first,
-        plan,
-    )
-    .unwrap()
+        .join(",")
 }
 
 /// Every way a run can reach frame f (in the whole shot, in its farm
@@ -420,12 +398,7 @@ fn issue_32_street() -> SceneDesc {
     }
     add_camera(
         &mut scene,
-        Projection::Perspective {
-            yfov: 0.8,
-            aspect_ratio: None,
-            znear: 0.1,
-            zfar: None,
-        },
+        perspective(0.8),
         look_at(DVec3::new(-45.0, 8.0, 0.0), DVec3::new(0.0, 2.0, 0.0)),
     );
     scene.animations.push(AnimationClip {

@@ -19,7 +19,7 @@ use lmanim::output::Image;
 use lmanim::scene::animation::{AnimationClip, Channel, Interpolation, Sampler};
 use lmanim::scene::pose::dynamic_nodes;
 use lmanim::scene::{
-    CameraProperty, LightKind, LightProperty, MaterialProperty, Projection, SceneDesc, Target,
+    CameraProperty, LightKind, LightProperty, MaterialProperty, SceneDesc, Target,
 };
 use lmanim::sequence::Sequence;
 use lmanim::settings::{BackendKind, Method, Settings};
@@ -56,12 +56,7 @@ fn street(truck_moves: bool, light_moves: bool, camera_moves: bool) -> SceneDesc
     );
     let camera = add_camera(
         &mut scene,
-        Projection::Perspective {
-            yfov: 0.9,
-            aspect_ratio: None,
-            znear: 0.1,
-            zfar: None,
-        },
+        perspective(0.9),
         look_at(DVec3::new(18.0, 4.0, 14.0), DVec3::new(30.0, 2.0, 0.0)),
     );
     for light in &mut scene.lights {

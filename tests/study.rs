@@ -93,15 +93,23 @@ fn a_tiny_study_writes_all_four_outputs() {
     assert!(out.join("reference.exr").is_file());
 }
 
+/// A Whitted-only study of `scene` into `dir`/first, which holds its
+/// rendered reference (`reference.exr`) and its tables: the reference
+/// the later studies are measured against.
+fn whitted_study(scene: &str, dir: &Path) -> PathBuf {
+    let first = dir.join("first");
+    let mut args = vec!["study", scene, "--quiet"];
+    args.extend(TINY);
+    args.extend(["--methods", "whitted", "--out", first.to_str().unwrap()]);
+    assert!(lmanim(&args).status.success());
+    first
+}
+
 #[test]
 fn a_given_reference_is_measured_against_with_its_mask() {
     let dir = tempfile::tempdir().unwrap();
     let scene = box_scene(dir.path());
-    let first = dir.path().join("first");
-    let mut args = vec!["study", scene.as_str(), "--quiet"];
-    args.extend(TINY);
-    args.extend(["--methods", "whitted", "--out", first.to_str().unwrap()]);
-    assert!(lmanim(&args).status.success());
+    let first = whitted_study(&scene, dir.path());
 
     // The same reference from a file, with its left half masked out.
     let reference = first.join("reference.exr");
@@ -249,11 +257,7 @@ fn openexr_files(dir: &Path, reference: &Path) -> Option<[PathBuf; 3]> {
 fn references_and_masks_of_any_layout_leave_out_exactly_the_masks_pixels() {
     let dir = tempfile::tempdir().unwrap();
     let scene = box_scene(dir.path());
-    let first = dir.path().join("first");
-    let mut args = vec!["study", scene.as_str(), "--quiet"];
-    args.extend(TINY);
-    args.extend(["--methods", "whitted", "--out", first.to_str().unwrap()]);
-    assert!(lmanim(&args).status.success());
+    let first = whitted_study(&scene, dir.path());
     let reference_path = first.join("reference.exr");
     let reference = read_exr(&reference_path).unwrap();
     let size = (48, 27);

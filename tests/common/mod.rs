@@ -8,8 +8,11 @@ pub mod cli;
 pub mod gpu;
 
 use glam::{DMat4, DQuat, DVec3, Vec3, Vec4};
+use lmanim::anim::pose::ClipSelection;
 use lmanim::output::Image;
+use lmanim::plan::Plan;
 use lmanim::scene::{Camera, Light, LightKind, Material, Mesh, Node, Projection, SceneDesc};
+use lmanim::schedule::{FrameSet, Timeline};
 use lmanim::sequence::Sequence;
 use lmanim::settings::Settings;
 use lmanim::stats::FrameStats;
@@ -122,6 +125,17 @@ pub fn add_light(scene: &mut SceneDesc, kind: LightKind, intensity: f32, local: 
     node
 }
 
+/// A perspective projection of vertical field of view `yfov` radians,
+/// the image's aspect, near plane 0.1 m, no far plane.
+pub fn perspective(yfov: f32) -> Projection {
+    Projection::Perspective {
+        yfov,
+        aspect_ratio: None,
+        znear: 0.1,
+        zfar: None,
+    }
+}
+
 pub fn add_camera(scene: &mut SceneDesc, projection: Projection, local: DMat4) -> usize {
     scene.cameras.push(Camera {
         name: Some("cam".into()),
@@ -160,6 +174,22 @@ pub fn top_camera_ground(px: u32, py: u32, width: u32, height: u32, ymag: f32) -
     let ndc_x = 2.0 * (px as f32 + 0.5) / width as f32 - 1.0;
     let ndc_y = 1.0 - 2.0 * (py as f32 + 0.5) / height as f32;
     (ndc_x * ymag * aspect, -ndc_y * ymag)
+}
+
+/// `scene` as the command line runs it: played by every clip, planned
+/// over `frames` (`--frames` text, e.g. `0..4`), starting at the first.
+pub fn planned(scene: &SceneDesc, settings: &Settings, frames: &str) -> Sequence {
+    let frames = FrameSet::parse(frames).expect("a frame set");
+    let plan = Plan::make(scene, settings, ClipSelection::All, &frames).expect("the scene places");
+    let first = Timeline { fps: settings.fps }.time_of(frames.frames()[0]);
+    Sequence::planned(
+        scene.clone(),
+        "test".into(),
+        ClipSelection::All,
+        first,
+        plan,
+    )
+    .expect("the scene places")
 }
 
 pub fn settings(width: u32, height: u32) -> Settings {
