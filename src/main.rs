@@ -25,7 +25,7 @@ use lmanim::lightmesh::penumbra::Penumbra;
 use lmanim::output::{self, ExrPrecision, FramePattern};
 use lmanim::plan;
 use lmanim::schedule::{FrameSet, Timeline};
-use lmanim::sequence::{self, Job};
+use lmanim::sequence::{self, Job, RunEvent};
 use lmanim::settings::{Aov, BackendKind, LightMeshSettings, Method, Settings};
 use lmanim::stats::RunStats;
 use lmanim::study::{self, StudyOptions};
@@ -510,7 +510,15 @@ fn run(cli: &RenderArgs) -> Result<(), Failure> {
     let progress = progress_bar(cli.quiet, frames.len() as u64);
     // Frames left out by --skip-existing, for the bar's message.
     let mut skipped = 0;
-    let stats = sequence::run(&job, |done| {
+    let stats = sequence::run(&job, |event| {
+        let done = match event {
+            RunEvent::Compiling {
+                compiled,
+                of,
+                seconds,
+            } => return report_compile(&progress, cli.quiet, compiled, of, seconds),
+            RunEvent::Frame(done) => done,
+        };
         if done.skipped {
             skipped += 1;
             progress.set_message(format!("{skipped} skipped (on disk)"));
@@ -837,6 +845,22 @@ fn default_pattern(scene: &Path) -> String {
         .file_stem()
         .map_or("scene".into(), |stem| stem.to_string_lossy());
     format!("renders/{stem}/frame.####.exr")
+}
+
+/// Says what a fresh machine waits for before its first GPU frame: on
+/// the bar while the pipelines compile (a farm's log, which has no bar,
+/// gets a line when they begin), and a line once they are done.
+fn report_compile(progress: &ProgressBar, quiet: bool, compiled: usize, of: usize, seconds: f64) {
+    progress.set_message(format!("compiling GPU pipelines {compiled}/{of}"));
+    if quiet {
+        return;
+    }
+    if compiled == 0 && progress.is_hidden() {
+        eprintln!("compiling {of} GPU pipelines (minutes on a machine that never ran lmanim)");
+    }
+    if compiled == of {
+        progress.suspend(|| eprintln!("GPU pipelines: {of} compiled in {seconds:.1} s"));
+    }
 }
 
 /// A bar with ETA on stderr; indicatif draws nothing when stderr is not a

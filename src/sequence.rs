@@ -93,7 +93,21 @@ pub struct Job<'a> {
     pub pattern: &'a FramePattern,
 }
 
-/// A frame has been written: what `on_frame` hears, for progress reports.
+/// What a run reports as it goes, for progress lines.
+pub enum RunEvent<'a> {
+    /// The GPU pipelines the frames need are being compiled before the
+    /// first: `compiled` of `of` are done, `seconds` after the first was
+    /// begun (reported once with 0 done before any is).
+    Compiling {
+        compiled: usize,
+        of: usize,
+        seconds: f64,
+    },
+    /// A frame's files are written, or it was skipped.
+    Frame(FrameDone<'a>),
+}
+
+/// A frame has been written: what a run reports of it.
 pub struct FrameDone<'a> {
     /// Position of the frame in the run (0 for the first).
     pub index: usize,
@@ -368,6 +382,23 @@ impl Sequence {
         Ok(frame)
     }
 
+    /// Compiles the GPU pipelines the frames will need (`auto` as the plan
+    /// resolves it: the light mesh's where it shades some light from it),
+    /// reporting (compiled, of) to `progress`.
+    pub fn prepare_pipelines(
+        &self,
+        backend: &Backend,
+        settings: &Settings,
+        progress: impl FnMut(usize, usize),
+    ) {
+        let method = match settings.method {
+            Method::Auto if self.shadows.uses_light_mesh(Method::Auto, &[]) => Method::Lmm1,
+            Method::Auto => Method::Whitted,
+            method => method,
+        };
+        backend.prepare_pipelines(method, &settings.aovs, progress);
+    }
+
     /// Computes the light-mesh masks the placed frame will need, without
     /// shading it (`lmanim warm`), filling `stats`.
     pub fn warm(
@@ -482,6 +513,9 @@ fn open(job: &Job) -> Result<(Backend, Sequence), RunError> {
     let settings = job.settings;
     let mut backend = Backend::new(settings.backend, settings.threads)?;
     backend.limit_mask_memory(settings.lightmesh.gpu_memory_mib.saturating_mul(1 << 20));
+    if let Some(dir) = &settings.cache_dir {
+        backend.keep_pipelines_in(Path::new(dir));
+    }
     let (scene, clips, plan) = load_planned(job)?;
     let first_time = Timeline { fps: settings.fps }.time_of(plan.frames.frames()[0]);
     let file = job.scene_path.display().to_string();
@@ -552,6 +586,9 @@ pub fn warm(job: &Job) -> Result<WarmStats, RunError> {
     if !sequence.shadows.uses_light_mesh(settings.method, &[]) {
         return Err(RunError::WarmWithoutLightMesh(settings.method));
     }
+    // A farm's warm step fills the pipeline cache as well as the masks':
+    // its render tasks then start without the driver's compile.
+    sequence.prepare_pipelines(&backend, settings, |_, _| {});
     let timeline = Timeline { fps: settings.fps };
     let mut warm = WarmStats::default();
     for &frame in job.frames.frames() {
@@ -591,8 +628,9 @@ fn skips(settings: &Settings, pattern: &FramePattern, frame: u32) -> bool {
 }
 
 /// Renders every frame of `job`, writing each while the next renders, and
-/// reports each to `on_frame` once its files are written.
-pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, RunError> {
+/// reports the pipelines' compile and each frame once its files are
+/// written to `on_event`.
+pub fn run(job: &Job, mut on_event: impl FnMut(RunEvent)) -> Result<RunStats, RunError> {
     let started = Instant::now();
     let settings = job.settings;
     if job.frames.len() > 1 && !job.pattern.has_placeholder() {
@@ -601,6 +639,15 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
         ));
     }
     let (mut backend, mut sequence) = open(job)?;
+    let compile_started = Instant::now();
+    sequence.prepare_pipelines(&backend, settings, |compiled, of| {
+        let seconds = compile_started.elapsed().as_secs_f64();
+        on_event(RunEvent::Compiling {
+            compiled,
+            of,
+            seconds,
+        })
+    });
     let mut run = RunStats {
         threads: backend.threads(),
         method: settings.method.to_string(),
@@ -624,14 +671,14 @@ pub fn run(job: &Job, mut on_frame: impl FnMut(FrameDone)) -> Result<RunStats, R
             stats.add_stage_time("output", write_seconds);
             stats.seconds += write_seconds;
         }
-        on_frame(FrameDone {
+        on_event(RunEvent::Frame(FrameDone {
             index: done.index,
             stats: &stats,
             path: &done.path,
             automatic_camera: done.automatic_camera,
             adapter: run.adapter.as_deref(),
             skipped: done.skipped,
-        });
+        }));
         match done.skipped {
             true => run.skipped.push(stats.frame),
             false => run.frames.push(stats),

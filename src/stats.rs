@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-use crate::backend::gpu::traffic::GpuTraffic;
+use crate::backend::gpu::traffic::GpuFrameStats;
 use crate::lightmesh::LightMeshStats;
 use crate::plan::Shadows;
 
@@ -127,9 +127,10 @@ pub struct FrameStats {
     /// Light-mesh work, for the LMM and LMM1 methods.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lightmesh: Option<LightMeshStats>,
-    /// What crossed between the CPU and the GPU (`--backend gpu` only).
+    /// What crossed between the CPU and the GPU, and the pipelines
+    /// compiled for the frame (`--backend gpu` only).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub gpu: Option<GpuTraffic>,
+    pub gpu: Option<GpuFrameStats>,
 }
 
 impl FrameStats {

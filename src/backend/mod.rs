@@ -13,6 +13,8 @@ pub mod cpu;
 pub mod gpu;
 mod sampling;
 
+use std::path::Path;
+
 pub use cpu::CpuBackend;
 pub use gpu::{GpuBackend, GpuError};
 
@@ -20,7 +22,7 @@ use crate::lightmesh::{LightMesh, LightMeshError};
 use crate::output::RenderedFrame;
 use crate::plan::Shadows;
 use crate::render::FrameJob;
-use crate::settings::{BackendKind, Method};
+use crate::settings::{Aov, BackendKind, Method};
 use crate::stats::FrameStats;
 
 /// Sets `stats`' mask bits per shadow class: the (node, light) bits
@@ -89,6 +91,28 @@ impl Backend {
     pub fn limit_mask_memory(&mut self, bytes: usize) {
         if let Backend::Gpu(gpu) = self {
             gpu.limit_mask_memory(bytes);
+        }
+    }
+
+    /// Keeps the GPU's compiled pipelines in `dir` across runs; the CPU
+    /// backend compiles nothing.
+    pub fn keep_pipelines_in(&mut self, dir: &Path) {
+        if let Backend::Gpu(gpu) = self {
+            gpu.keep_pipelines_in(dir);
+        }
+    }
+
+    /// Compiles the GPU pipelines frames by `method` with `aovs` need,
+    /// reporting (compiled, of) to `progress` (see
+    /// [`GpuBackend::prepare_pipelines`]); nothing on the CPU.
+    pub fn prepare_pipelines(
+        &self,
+        method: Method,
+        aovs: &[Aov],
+        progress: impl FnMut(usize, usize),
+    ) {
+        if let Backend::Gpu(gpu) = self {
+            gpu.prepare_pipelines(method, aovs, progress);
         }
     }
 

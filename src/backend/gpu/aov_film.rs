@@ -47,8 +47,8 @@ impl From<&FirstHitRecord> for FirstHit {
 
 /// The AOV film's two pipelines, made by the first frame with AOVs.
 pub struct AovPasses {
-    first_hits: WorldPass,
-    layers: WorldPass,
+    pub(super) first_hits: WorldPass,
+    pub(super) layers: WorldPass,
 }
 
 impl AovPasses {

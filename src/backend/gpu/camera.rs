@@ -71,7 +71,7 @@ impl CameraRecord {
 
 /// The camera pipeline, made once per run.
 pub struct CameraPass {
-    pass: WorldPass,
+    pub(super) pass: WorldPass,
 }
 
 impl CameraPass {

@@ -2,13 +2,17 @@
 //! the ray queries need, and described once for the user.
 
 use std::fmt;
+use std::path::Path;
 
+use super::pipeline_cache::{self, PipelineCache};
+use super::shaders::Arithmetic;
 use super::traffic::Traffic;
 
 /// Storage buffers one pass binds at most: formula (2)'s, which binds its
-/// points and answers, the flat world's seven arrays, the lights, the
-/// points' reaching lights, the mask pool, its directory and its counters.
-pub const STORAGE_BUFFERS: u32 = 14;
+/// parameters (storage, not uniform: see `common.wgsl`), its points and
+/// answers, the flat world's seven arrays, the lights, the points'
+/// reaching lights, the mask pool, its directory and its counters.
+pub const STORAGE_BUFFERS: u32 = 15;
 /// Storage buffers formula (2) binds when it keeps its terms per light
 /// layer (`--aovs light`): one more, the points' layer sums. An adapter
 /// that binds fewer renders everything else.
@@ -72,6 +76,8 @@ pub struct GpuContext {
     pub exact: bool,
     /// What crossed the bus so far.
     pub traffic: Traffic,
+    /// The pipelines made so far, and the driver's cache they go through.
+    pub pipelines: PipelineCache,
 }
 
 impl GpuContext {
@@ -103,6 +109,8 @@ impl GpuContext {
         let mut features = wgpu::Features::empty();
         features.set(wgpu::Features::SHADER_F64, f64);
         features.set(wgpu::Features::PASSTHROUGH_SHADERS, own_spirv);
+        let cache = wgpu::Features::PIPELINE_CACHE;
+        features.set(cache, adapter.features().contains(cache));
         let storage_buffers =
             (available.max_storage_buffers_per_shader_stage).min(LAYERED_STORAGE_BUFFERS);
         let limits = wgpu::Limits {
@@ -133,7 +141,23 @@ impl GpuContext {
             own_spirv,
             exact: f64 && own_spirv,
             traffic: Traffic::default(),
+            pipelines: PipelineCache::none(),
         })
+    }
+
+    /// How the shaders round on this adapter (see [`GpuContext::f64`]).
+    pub fn arithmetic(&self) -> Arithmetic {
+        match self.f64 {
+            true => Arithmetic::ExactF64,
+            false => Arithmetic::PlainF32,
+        }
+    }
+
+    /// Makes the pipelines from now on through the driver's cache kept in
+    /// `dir` (loaded from it now, saved by [`PipelineCache::save`]).
+    pub fn keep_pipelines_in(&mut self, dir: &Path) {
+        let shaders = pipeline_cache::shader_hash(self.arithmetic(), self.own_spirv);
+        self.pipelines = PipelineCache::open(&self.device, &self.info, dir, shaders);
     }
 
     /// Whether the adapter is a CPU (lavapipe, WARP, SwiftShader): its

@@ -189,7 +189,7 @@ impl FrameLights {
 /// The direct-light pipelines, made once per run (the light layers' when
 /// first asked for).
 pub struct DirectLightPass {
-    pass: LayeredPass,
+    pub(super) pass: LayeredPass,
 }
 
 impl DirectLightPass {

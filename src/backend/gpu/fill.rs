@@ -50,7 +50,7 @@ impl From<&Segment> for FillSegment {
 
 /// The fill's pipeline, made once per run.
 pub struct FillPass {
-    pass: WorldPass,
+    pub(super) pass: WorldPass,
 }
 
 impl FillPass {

@@ -46,8 +46,8 @@ impl From<&Environment> for EnvironmentRecord {
 
 /// The two pipelines, made once per run.
 pub struct FilmPasses {
-    accumulate: WorldPass,
-    resolve: WorldPass,
+    pub(super) accumulate: WorldPass,
+    pub(super) resolve: WorldPass,
 }
 
 impl FilmPasses {

@@ -24,7 +24,7 @@ use super::pass::{answer_buffer, read_back, BATCH};
 use super::scatter::batches;
 use super::scene::{storage, GpuScene};
 use super::surface::{FrameSurfaces, LevelBuffers, PathRay, SceneSurfaces, SurfacePoint};
-use super::Pipelines;
+use super::pipelines::Pipelines;
 use crate::accel::Ray;
 use crate::backend::aov::{AovFrame, BandSamples};
 use crate::backend::sampling::lamp_sample;
@@ -98,7 +98,7 @@ impl Frame<'_> {
                 let mut encoder =
                     self.shade(encoder, &camera_rays, films, method, band_start, stats)?;
                 if let Some(aov_film) = &aov_film {
-                    let passes = self.pipelines.aovs(context);
+                    let passes = &self.pipelines.aovs;
                     aov_film.record_first_hits(
                         passes,
                         context,
@@ -221,7 +221,7 @@ impl Frame<'_> {
             &direct,
         );
         if let (Some(aov_film), Some(layers)) = (aov_film, &layers) {
-            let passes = pipelines.aovs(context);
+            let passes = &pipelines.aovs;
             aov_film.accumulate(passes, context, &mut encoder, scene, film, level, layers);
         }
         Ok(encoder)

@@ -1,9 +1,9 @@
 //! Formula (1) and (2) in two pipelines each: the beauty's, whose terms go
 //! into their sum alone (`light_sum.wgsl`), and the `light` AOV's, which
 //! also sums each point's terms per light layer into [`PointLayers`]
-//! (`light_layers.wgsl`). The second is compiled by the first frame that
-//! asks for it and binds one storage buffer more, so a run without
-//! `--aovs light` compiles, binds and runs just what it did before.
+//! (`light_layers.wgsl`). The second binds one storage buffer more, which
+//! some adapters lack, so it is made only when a run asks for it; a run
+//! without `--aovs light` binds and runs just what it did before.
 
 use std::sync::OnceLock;
 
@@ -75,9 +75,24 @@ impl LayeredPass {
         }
     }
 
-    /// The beauty's pipeline.
+    /// The beauty's pass.
     pub fn plain(&self) -> &WorldPass {
         &self.plain
+    }
+
+    /// The `light` AOV's pass, made now unless it is made (only where
+    /// [`GpuContext::check_light_layers`] passes).
+    pub fn layered(&self, context: &GpuContext) -> &WorldPass {
+        self.layered.get_or_init(|| {
+            let writes: Vec<u32> = self.writes.iter().copied().chain([POINT_LAYERS]).collect();
+            WorldPass::new(
+                context,
+                self.layered_entry,
+                self.world,
+                &self.reads,
+                &writes,
+            )
+        })
     }
 
     /// Records the pass as [`WorldPass::record`] does, keeping the terms
@@ -94,20 +109,10 @@ impl LayeredPass {
         let Some(layers) = layers else {
             return (self.plain).record(context, encoder, dispatch, reads, answers);
         };
-        let pass = self.layered.get_or_init(|| {
-            let writes: Vec<u32> = self.writes.iter().copied().chain([POINT_LAYERS]).collect();
-            WorldPass::new(
-                context,
-                self.layered_entry,
-                self.world,
-                &self.reads,
-                &writes,
-            )
-        });
         let reads: Vec<Bound> = (reads.iter().copied())
             .chain([(POINT_LAYERS, &layers.buffer)])
             .collect();
         let dispatch = dispatch.with_layers(layers.layers);
-        pass.record(context, encoder, dispatch, &reads, answers);
+        (self.layered(context)).record(context, encoder, dispatch, &reads, answers);
     }
 }

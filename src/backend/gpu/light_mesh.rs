@@ -57,9 +57,9 @@ const LOOPS_CUT_SHORT: usize = 10;
 /// The light mesh's pipelines, made once per run: coverage (which points
 /// the pool serves), gathering the points it does not, and formula (2).
 pub struct LightMeshPasses {
-    coverage: WorldPass,
-    gather: WorldPass,
-    shade: LayeredPass,
+    pub(super) coverage: WorldPass,
+    pub(super) gather: WorldPass,
+    pub(super) shade: LayeredPass,
 }
 
 impl LightMeshPasses {

@@ -33,6 +33,9 @@ mod layered;
 mod light_mesh;
 pub mod mask_pool;
 mod pass;
+mod pipeline_cache;
+mod pipeline_file;
+mod pipelines;
 mod scatter;
 pub(crate) mod scene;
 mod shaders;
@@ -41,7 +44,7 @@ pub(crate) mod surface;
 pub(crate) mod trace;
 pub mod traffic;
 
-use std::sync::OnceLock;
+use std::path::Path;
 use std::time::Instant;
 
 pub use context::{GpuContext, GpuError};
@@ -59,50 +62,14 @@ use crate::render::surface::ShadingPoint;
 use crate::render::FrameJob;
 use crate::settings::{Aov, LightMeshSettings, Method};
 use crate::stats::FrameStats;
-use aov_film::AovPasses;
-use camera::CameraPass;
 use fill::FillPass;
-use film::FilmPasses;
 use frame::{DirectMethod, Frame};
-use light_mesh::{LightMeshPasses, LightMeshShading};
+use light_mesh::LightMeshShading;
 use mask_pool::MaskPool;
-use scatter::ScatterPasses;
-use surface::{FrameSurfaces, SceneSurfaces, SurfacePass};
-
-/// Every pipeline of the backend, made once per run; the AOV film's by
-/// the first frame with AOVs.
-pub struct Pipelines {
-    camera: CameraPass,
-    queries: RayQueries,
-    surfaces: SurfacePass,
-    direct: DirectLightPass,
-    fill: FillPass,
-    light_mesh: LightMeshPasses,
-    scatter: ScatterPasses,
-    film: FilmPasses,
-    aovs: OnceLock<AovPasses>,
-}
-
-impl Pipelines {
-    fn new(context: &GpuContext) -> Pipelines {
-        Pipelines {
-            camera: CameraPass::new(context),
-            queries: RayQueries::new(context),
-            surfaces: SurfacePass::new(context),
-            direct: DirectLightPass::new(context),
-            fill: FillPass::new(context),
-            light_mesh: LightMeshPasses::new(context),
-            scatter: ScatterPasses::new(context),
-            film: FilmPasses::new(context),
-            aovs: OnceLock::new(),
-        }
-    }
-
-    /// The AOV film's pipelines, made the first time they are asked for.
-    fn aovs(&self, context: &GpuContext) -> &AovPasses {
-        self.aovs.get_or_init(|| AovPasses::new(context))
-    }
-}
+pub use pipeline_cache::PipelineMade;
+use pipelines::Pipelines;
+use surface::{FrameSurfaces, SceneSurfaces};
+use traffic::GpuFrameStats;
 
 pub struct GpuBackend {
     pool: rayon::ThreadPool,
@@ -123,8 +90,8 @@ pub struct GpuBackend {
 }
 
 impl GpuBackend {
-    /// Finds the adapter and builds the pipelines; `threads` CPU workers
-    /// make rays and shade.
+    /// Finds the adapter; `threads` CPU workers make rays and shade. No
+    /// pipeline is compiled yet: see [`GpuBackend::prepare_pipelines`].
     pub fn new(threads: Option<usize>) -> Result<GpuBackend, BackendError> {
         let context = GpuContext::new()?;
         Ok(GpuBackend {
@@ -148,6 +115,42 @@ impl GpuBackend {
 
     pub fn threads(&self) -> usize {
         self.pool.current_num_threads()
+    }
+
+    /// Keeps the driver's compiled pipelines in `dir` across runs: loads
+    /// them now, and saves what a run adds (see `pipeline_cache`).
+    pub fn keep_pipelines_in(&mut self, dir: &Path) {
+        self.context.keep_pipelines_in(dir);
+    }
+
+    /// Compiles the pipelines frames by `method` with `aovs` need, side by
+    /// side, reporting (compiled, of) to `progress`, and saves them to
+    /// the pipeline cache. The times go to the next frame's stats.
+    pub fn prepare_pipelines(
+        &self,
+        method: Method,
+        aovs: &[Aov],
+        progress: impl FnMut(usize, usize),
+    ) {
+        let context = &self.context;
+        let passes = self.pipelines.needed(context, method, aovs);
+        // A software adapter compiles on its one queue thread, at a
+        // pipeline's first dispatch: more threads would only wait there,
+        // and each pipeline's time would include the others'.
+        let threads = match context.is_software() {
+            true => 1,
+            false => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        };
+        Pipelines::prepare(context, &passes, threads, progress);
+        self.save_pipelines();
+    }
+
+    /// Writes the pipeline cache if the run made a pipeline it lacks; a
+    /// failure costs only the next run's compile, so it is a warning.
+    fn save_pipelines(&self) {
+        if let Err(error) = self.context.pipelines.save() {
+            log::warn!("the GPU pipeline cache was not saved: {error}");
+        }
     }
 
     /// Whether the adapter rounds as the CPU does (it has f64): then every
@@ -288,7 +291,12 @@ impl GpuBackend {
             light_mesh.finish(&self.context, job, stats)?;
         }
         self.mask_pool = Some(pool);
-        stats.gpu = Some(self.context.traffic.since(traffic));
+        self.save_pipelines();
+        let pipelines = self.context.pipelines.take_made();
+        stats.gpu = Some(GpuFrameStats {
+            traffic: self.context.traffic.since(traffic),
+            pipelines,
+        });
         let image = Image {
             width: job.width,
             height: job.height,

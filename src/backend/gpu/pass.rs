@@ -6,10 +6,12 @@
 //! recorded into one encoder and their intermediate answers never leave
 //! the GPU; [`WorldPass::run`] is the round trip for a single pass.
 
+use std::sync::OnceLock;
+
 use bytemuck::Pod;
 
 use super::context::{GpuContext, GpuError};
-use super::scene::GpuScene;
+use super::scene::{GpuScene, Params};
 use super::shaders::{self, Arithmetic, Entry};
 use super::spirv;
 
@@ -22,6 +24,10 @@ pub const BATCH: usize = 1 << 20;
 /// The binding of a pass's items; its answers go to [`ANSWERS`].
 pub const ITEMS: u32 = 1;
 const ANSWERS: u32 = 7;
+/// The size of each array an empty dispatch binds: more than any one
+/// record a shader reads from an array, as the layout test in
+/// `shaders.rs` sizes them.
+const EMPTY_BINDING_BYTES: u64 = 4096;
 
 /// The pass's shader: our own SPIR-V where the context takes it (every
 /// float operation kept from fusing), else WGSL for wgpu to translate.
@@ -30,10 +36,10 @@ fn shader_module(
     entry: Entry,
     layout: &[wgpu::BindGroupLayoutEntry],
 ) -> wgpu::ShaderModule {
-    let (arithmetic, capabilities) = if context.f64 {
-        (Arithmetic::ExactF64, naga::valid::Capabilities::FLOAT64)
-    } else {
-        (Arithmetic::PlainF32, naga::valid::Capabilities::empty())
+    let arithmetic = context.arithmetic();
+    let capabilities = match arithmetic {
+        Arithmetic::ExactF64 => naga::valid::Capabilities::FLOAT64,
+        Arithmetic::PlainF32 => naga::valid::Capabilities::empty(),
     };
     let source = shaders::source(entry, arithmetic);
     if !context.own_spirv {
@@ -107,16 +113,20 @@ impl<'a> Dispatch<'a> {
     }
 }
 
-/// A compute pipeline and its bind group layout.
+/// A compute pass: its bind group layout, made with the pass, and its
+/// pipeline, compiled the first time the pass is prepared or recorded
+/// (compiling is what a fresh machine waits for: see
+/// [`super::pipeline_cache`]).
 pub struct WorldPass {
     entry: Entry,
     world: WorldUse,
+    bindings: Vec<wgpu::BindGroupLayoutEntry>,
     layout: wgpu::BindGroupLayout,
-    pipeline: wgpu::ComputePipeline,
+    pipeline: OnceLock<wgpu::ComputePipeline>,
 }
 
 impl WorldPass {
-    /// The pipeline of `entry`, binding its items, its answers, the world
+    /// The pass of `entry`, binding its items, its answers, the world
     /// as `world` says, the read-only arrays at `reads` and further
     /// writable ones at `writes`.
     pub fn new(
@@ -126,7 +136,6 @@ impl WorldPass {
         reads: &[u32],
         writes: &[u32],
     ) -> WorldPass {
-        let device = &context.device;
         let buffer = |binding, ty| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -138,8 +147,8 @@ impl WorldPass {
             count: None,
         };
         let read_only = wgpu::BufferBindingType::Storage { read_only: true };
-        let mut entries = vec![
-            buffer(0, wgpu::BufferBindingType::Uniform),
+        let mut bindings = vec![
+            buffer(0, read_only),
             buffer(ITEMS, read_only),
             buffer(
                 ANSWERS,
@@ -150,33 +159,142 @@ impl WorldPass {
             WorldUse::Traces => &GpuScene::BINDINGS,
             WorldUse::None => &[],
         };
-        let bindings = world_bindings.iter().chain(reads);
-        entries.extend(bindings.map(|&binding| buffer(binding, read_only)));
+        let reads = world_bindings.iter().chain(reads);
+        bindings.extend(reads.map(|&binding| buffer(binding, read_only)));
         let writable = wgpu::BufferBindingType::Storage { read_only: false };
-        entries.extend(writes.iter().map(|&binding| buffer(binding, writable)));
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        bindings.extend(writes.iter().map(|&binding| buffer(binding, writable)));
+        let layout = (context.device).create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some(entry.name()),
-            entries: &entries,
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some(entry.name()),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = shader_module(context, entry, &entries);
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry.name()),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some(entry.name()),
-            compilation_options: Default::default(),
-            cache: None,
+            entries: &bindings,
         });
         WorldPass {
             entry,
             world,
+            bindings,
             layout,
-            pipeline,
+            pipeline: OnceLock::new(),
+        }
+    }
+
+    /// The name the pipeline goes by in stats and in the pipeline cache.
+    pub fn name(&self) -> &'static str {
+        self.entry.pipeline_name()
+    }
+
+    /// The size of the module the driver compiles, the measure of how
+    /// long it takes.
+    pub fn source_bytes(&self, context: &GpuContext) -> usize {
+        shaders::source(self.entry, context.arithmetic()).len()
+    }
+
+    /// Compiles the pipeline now unless it is compiled, and runs it once
+    /// over no items: some drivers (lavapipe) compile at a pipeline's
+    /// first dispatch, and a run should wait for that here, where it is
+    /// timed and reported, not inside its first frame.
+    pub fn prepare(&self, context: &GpuContext) {
+        self.pipeline.get_or_init(|| {
+            context.pipelines.make(self.name(), |cache| {
+                let pipeline = self.compile(context, cache);
+                self.run_empty(context, &pipeline);
+                pipeline
+            })
+        });
+    }
+
+    /// The pipeline, compiled now if it is not yet.
+    fn pipeline(&self, context: &GpuContext) -> &wgpu::ComputePipeline {
+        self.pipeline.get_or_init(|| {
+            (context.pipelines).make(self.name(), |cache| self.compile(context, cache))
+        })
+    }
+
+    fn compile(
+        &self,
+        context: &GpuContext,
+        cache: Option<&wgpu::PipelineCache>,
+    ) -> wgpu::ComputePipeline {
+        let device = &context.device;
+        let name = self.entry.name();
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(name),
+            bind_group_layouts: &[Some(&self.layout)],
+            immediate_size: 0,
+        });
+        let module = shader_module(context, self.entry, &self.bindings);
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(name),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some(name),
+            compilation_options: Default::default(),
+            cache,
+        })
+    }
+
+    /// Dispatches `pipeline` once with zero items (every entry point
+    /// returns at once), every binding bound to a zeroed buffer, and
+    /// waits. A refusal only means the driver compiles later: it is
+    /// logged, not returned.
+    fn run_empty(&self, context: &GpuContext, pipeline: &wgpu::ComputePipeline) {
+        let device = &context.device;
+        let zeroed = |bytes: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("empty dispatch"),
+                size: bytes,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let params = zeroed(size_of::<Params>() as u64, wgpu::BufferUsages::STORAGE);
+        let storage = wgpu::BufferUsages::STORAGE;
+        let read_only = zeroed(EMPTY_BINDING_BYTES, storage);
+        let buffers: Vec<(u32, wgpu::Buffer)> = (self.bindings.iter())
+            .filter(|binding| binding.binding != 0)
+            .filter(|binding| {
+                !matches!(
+                    binding.ty,
+                    wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        ..
+                    }
+                )
+            })
+            .map(|binding| (binding.binding, zeroed(EMPTY_BINDING_BYTES, storage)))
+            .collect();
+        let resource = |binding: u32| {
+            let buffer = match binding {
+                0 => &params,
+                _ => (buffers.iter())
+                    .find(|(writable, _)| *writable == binding)
+                    .map_or(&read_only, |(_, buffer)| buffer),
+            };
+            buffer.as_entire_binding()
+        };
+        let entries: Vec<wgpu::BindGroupEntry> = (self.bindings.iter())
+            .map(|binding| wgpu::BindGroupEntry {
+                binding: binding.binding,
+                resource: resource(binding.binding),
+            })
+            .collect();
+        let ran = context.checked("an empty dispatch", || {
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(self.entry.name()),
+                layout: &self.layout,
+                entries: &entries,
+            });
+            let mut encoder = device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, &bind_group, &[]);
+                pass.dispatch_workgroups(1, 1, 1);
+            }
+            context.queue.submit([encoder.finish()]);
+            (device.poll(wgpu::PollType::wait_indefinitely()))
+                .map_err(|error| GpuError::Readback(error.to_string()))
+        });
+        if let Err(error) = ran {
+            log::debug!("{}: {error}", self.name());
         }
     }
 
@@ -203,7 +321,7 @@ impl WorldPass {
         let params = context.upload(
             "pass params",
             bytemuck::bytes_of(&params),
-            wgpu::BufferUsages::UNIFORM,
+            wgpu::BufferUsages::STORAGE,
         );
         let world = match self.world {
             WorldUse::Traces => scene.buffers().to_vec(),
@@ -223,8 +341,9 @@ impl WorldPass {
             layout: &self.layout,
             entries: &entries,
         });
+        let pipeline = self.pipeline(context);
         let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &bind_group, &[]);
         pass.dispatch_workgroups((count as u32).div_ceil(WORKGROUP), 1, 1);
     }

@@ -22,10 +22,10 @@ const BLOCK_OFFSETS: u32 = 21;
 
 /// The four pipelines, made once per run.
 pub struct ScatterPasses {
-    scatter: WorldPass,
-    scan_blocks: WorldPass,
-    scan_sums: WorldPass,
-    compact: WorldPass,
+    pub(super) scatter: WorldPass,
+    pub(super) scan_blocks: WorldPass,
+    pub(super) scan_sums: WorldPass,
+    pub(super) compact: WorldPass,
 }
 
 impl ScatterPasses {

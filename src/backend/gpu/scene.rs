@@ -15,7 +15,7 @@ const WIDE_DEPTH_LIMIT: usize = 13;
 /// Deepest binary tree the shader's stacks hold (`BINARY_STACK`).
 const BINARY_DEPTH_LIMIT: usize = 64;
 
-/// The uniform every pass reads; `scene.wgsl`'s `Params`.
+/// The parameters every pass reads (binding 0); `common.wgsl`'s `Params`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct Params {
@@ -84,7 +84,7 @@ impl GpuScene {
         Ok(())
     }
 
-    /// The uniform for a batch of `item_count` items and `light_count`
+    /// The parameters for a batch of `item_count` items and `light_count`
     /// lights over this scene.
     pub fn params(&self, item_count: u32, light_count: u32, layer_count: u32) -> Params {
         Params {

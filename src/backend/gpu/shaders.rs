@@ -41,7 +41,6 @@ pub enum Entry {
 }
 
 impl Entry {
-    #[cfg(test)]
     pub const ALL: [Entry; 19] = [
         Entry::CameraRays,
         Entry::ClosestHit,
@@ -64,6 +63,18 @@ impl Entry {
         Entry::AccumulateLayers,
     ];
 
+    /// The pipeline's name in stats and in the pipeline cache: the
+    /// entry point's, told apart for the light-layer variants that share
+    /// one.
+    pub fn pipeline_name(self) -> &'static str {
+        match self {
+            Entry::DirectLightLayers => "direct_light_layers",
+            Entry::LightMeshLayers => "light_mesh_layers",
+            entry => entry.name(),
+        }
+    }
+
+    /// The entry point's name in its module.
     pub fn name(self) -> &'static str {
         match self {
             Entry::CameraRays => "camera_rays",

@@ -405,7 +405,7 @@ fn mat3_columns(m: &Mat3) -> [[f32; 4]; 3] {
 
 /// The shading-point pipeline, made once per run.
 pub struct SurfacePass {
-    pass: WorldPass,
+    pub(super) pass: WorldPass,
 }
 
 impl SurfacePass {

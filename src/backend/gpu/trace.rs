@@ -63,8 +63,8 @@ impl HitRecord {
 
 /// The two ray-query pipelines, made once per run.
 pub struct RayQueries {
-    closest: WorldPass,
-    any: WorldPass,
+    pub(super) closest: WorldPass,
+    pub(super) any: WorldPass,
 }
 
 impl RayQueries {

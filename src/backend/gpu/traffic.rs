@@ -12,6 +12,16 @@ use serde::Serialize;
 use wgpu::util::DeviceExt;
 
 use super::context::GpuContext;
+use super::pipeline_cache::PipelineMade;
+
+/// A frame's `gpu` object in `--stats`: its traffic, and the pipelines
+/// compiled for it (the first frame's, mostly; see `pipelines`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct GpuFrameStats {
+    #[serde(flatten)]
+    pub traffic: GpuTraffic,
+    pub pipelines: Vec<PipelineMade>,
+}
 
 /// Running totals since the device was made.
 #[derive(Debug, Default)]

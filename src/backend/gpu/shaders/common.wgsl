@@ -1,4 +1,4 @@
-// What every pass reads: its uniform. Each pass declares its own items
+// What every pass reads: its parameters. Each pass declares its own items
 // (binding 1) and answers (binding 7). Layouts are declared on the Rust
 // side as `Pod` structs; a test compares sizes and offsets.
 
@@ -19,7 +19,11 @@ struct Params {
     layer_count: u32,
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+// In a storage buffer, not a uniform one: lavapipe compiles a shader
+// anew for each set of values its uniforms take (it inlines them as
+// constants), and the item and light counts change with every dispatch;
+// its first LMM1 frame waited minutes for those compiles.
+@group(0) @binding(0) var<storage, read> params: Params;
 
 // The mesh of a hit record that records no hit.
 const NO_MESH: u32 = 0xffffffffu;

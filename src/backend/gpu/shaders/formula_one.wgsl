@@ -32,15 +32,31 @@ fn shadowed(origin: vec3<f32>, light: Light) -> bool {
 }
 
 // Whether anything lies on the ray from `origin` along `direction` before
-// `t_max`; the dynamic part is the small one and goes first, as in
-// `World::occluded`.
+// `t_max`.
 fn segment_blocked(origin: vec3<f32>, direction: vec3<f32>, t_max: f32) -> bool {
-    var found = no_hit();
-    walk_dynamic(origin, direction, t_max, true, &found);
-    if found.mesh == NO_MESH {
-        walk_static(origin, direction, t_max, true, &found);
+    return trace_segment(origin, direction, t_max, true).mesh != NO_MESH;
+}
+
+// The ray from `origin` along `direction` before `t_max`: its closest hit,
+// or with `any` the first found (the dynamic part, the small one, goes
+// first then, as in `World::occluded`; the closest hit walks the static
+// part first). Both walks are written once, so a caller that traces from
+// one place holds one copy of the traversal: drivers inline every call,
+// and a copy per call site is what made formula (2)'s shader take minutes
+// to compile on lavapipe.
+fn trace_segment(origin: vec3<f32>, direction: vec3<f32>, t_max: f32, any: bool) -> Closest {
+    var best = no_hit();
+    for (var part = 0u; part < 2u; part++) {
+        if (part == 0u) == any {
+            walk_dynamic(origin, direction, t_max, any, &best);
+        } else {
+            walk_static(origin, direction, t_max, any, &best);
+        }
+        if any && best.mesh != NO_MESH {
+            break;
+        }
     }
-    return found.mesh != NO_MESH;
+    return best;
 }
 
 // Lights are taken 32 at a time: first which of them bring light (Omega

@@ -234,9 +234,7 @@ struct BlockerHit {
 
 fn blocker_hit(start: vec3<f32>, centre: vec3<f32>) -> BlockerHit {
     let direction = centre - start;
-    var best = no_hit();
-    walk_static(start, direction, SHADOW_SEGMENT_END, false, &best);
-    walk_dynamic(start, direction, SHADOW_SEGMENT_END, false, &best);
+    let best = trace_segment(start, direction, SHADOW_SEGMENT_END, false);
     if best.mesh == NO_MESH {
         return BlockerHit(false, 0.0, 0.0);
     }
@@ -368,52 +366,72 @@ fn find_nearest_blocked(ball: HalfBall, wide: bool, reach_base: u32, word: u32, 
     }
 }
 
-// `LightMesh::blocker_share`: the share of `light` (bit `bit` of the
-// word) over the lamp disk of the lattice level its penumbra wants at the
-// point, found from the blocker of the centre ray or of the set's nearest
-// blocked node (`find_nearest_blocked`).
-fn blocker_share(point: ShadePoint, origin: vec3<f32>, bit: u32, light: Light, wide: bool) -> BlockerShare {
-    if !is_lamp(light) {
-        return BlockerShare(SHARE_FIXED, 0.0, 0u);
-    }
-    let found = (nearest_found >> bit & 1u) != 0u;
-    let nearest_blocked = select(point.position, node_position(nearest_node[bit]), found);
-    var blocker = blocker_hit(origin, light.origin);
-    let centre_visible = !blocker.found;
-    if centre_visible {
-        blocker = blocker_hit(nearest_blocked, light.origin);
-    }
-    return level_share(point, light, blocker, centre_visible, select(1u, 2u, centre_visible), wide);
-}
+// How a lamp's share at the point is sized (`lamp_share`): not at all
+// (the set's answer stands); from the blocker of the centre ray or of the
+// nearest blocked node of the point's own set (`LightMesh::blocker_share`)
+// or of its wide set; or, for a lamp every node sees, from a ray grazing
+// the surface (`LightMesh::grazing_share`).
+const SIZED_BY_NOTHING: u32 = 0u;
+const SIZED_BY_BLOCKER: u32 = 1u;
+const SIZED_BY_WIDE_BLOCKER: u32 = 2u;
+const SIZED_BY_GRAZING_RAY: u32 = 3u;
 
 // `penumbra::GRAZING_COSINE`.
 const GRAZING_COSINE: f32 = 0.3;
 
-// `LightMesh::grazing_share` (`penumbra::grazing_estimate`): for a lamp
-// every node of the set sees, grazing the surface, the blocker of a ray
-// towards the lamp's point nearest the surface sizes its share, and the
-// centre ray decides the hard answer; SHARE_FIXED where the lamp does not
-// graze or the ray is clear.
-fn grazing_share(point: ShadePoint, origin: vec3<f32>, light: Light) -> BlockerShare {
-    if !is_lamp(light) {
+// The share of `light` (bit `bit` of the word) over the lamp disk of the
+// lattice level its penumbra wants at the point, sized as `sizing` says;
+// SHARE_FIXED where nothing sizes it. The two sizings trace at most two
+// rays before the level's, from one place (see `trace_segment`):
+// - by the blocker: the centre ray, and where it is clear the ray from
+//   the set's nearest blocked node (`find_nearest_blocked`);
+// - by a grazing ray (`penumbra::grazing_estimate`), for a lamp that
+//   grazes the surface: a ray towards the lamp's point nearest the
+//   surface, and where it is blocked the centre ray, which decides the
+//   hard answer.
+fn lamp_share(point: ShadePoint, origin: vec3<f32>, bit: u32, light: Light, sizing: u32) -> BlockerShare {
+    if sizing == SIZED_BY_NOTHING || !is_lamp(light) {
         return BlockerShare(SHARE_FIXED, 0.0, 0u);
     }
-    let n = point.geometric_normal;
-    let to_lamp = light.origin - origin;
-    let height = dot3(to_lamp, n);
-    if !(height > 0.0 && height < mul(GRAZING_COSINE, root(dot3(to_lamp, to_lamp)))) {
-        return BlockerShare(SHARE_FIXED, 0.0, 0u);
+    let grazing = sizing == SIZED_BY_GRAZING_RAY;
+    var first_target = light.origin;
+    var second_start = origin;
+    if grazing {
+        let n = point.geometric_normal;
+        let to_lamp = light.origin - origin;
+        let height = dot3(to_lamp, n);
+        if !(height > 0.0 && height < mul(GRAZING_COSINE, root(dot3(to_lamp, to_lamp)))) {
+            return BlockerShare(SHARE_FIXED, 0.0, 0u);
+        }
+        first_target = light.origin - scale3(n, lane_min(light.lamp_radius, mul(0.5, height)));
+    } else if (nearest_found >> bit & 1u) != 0u {
+        second_start = node_position(nearest_node[bit]);
+    } else {
+        second_start = point.position;
     }
-    let lowest = light.origin - scale3(n, lane_min(light.lamp_radius, mul(0.5, height)));
-    let probe = blocker_hit(origin, lowest);
-    if !probe.found {
+    var hits: array<BlockerHit, 2>;
+    var rays = 0u;
+    for (; rays < 2u; rays++) {
+        let start = select(origin, second_start, rays == 1u);
+        let end = select(light.origin, first_target, rays == 0u);
+        hits[rays] = blocker_hit(start, end);
+        // The blocker's second ray follows a clear centre ray, the
+        // grazing one's follows a blocked probe.
+        if hits[0].found != grazing {
+            rays += 1u;
+            break;
+        }
+    }
+    if grazing && !hits[0].found {
         return BlockerShare(SHARE_FIXED, 0.0, 1u);
     }
-    let centre = blocker_hit(origin, light.origin);
-    if centre.found {
-        return level_share(point, light, centre, false, 2u, false);
-    }
-    return level_share(point, light, probe, true, 2u, false);
+    // The centre ray is the first or the second; the blocker that sizes
+    // the level is the other's where the centre is clear.
+    let centre = u32(grazing);
+    let centre_visible = !hits[centre].found;
+    let blocker = hits[select(centre, 1u - centre, centre_visible)];
+    let wide = sizing == SIZED_BY_WIDE_BLOCKER;
+    return level_share(point, light, blocker, centre_visible, rays, wide);
 }
 
 // `LightMesh::share_over_level`: the share of `light` over the lamp disk
@@ -501,6 +519,9 @@ fn loops_were_cut_short() -> bool {
 }
 
 // Formula (2), or formula (1) where the set is empty, at point `index`.
+// Each kind of ray is traced from one place (see `trace_segment`): one
+// call of formula (1), for the frame's formula-(1) lights and, where the
+// set is empty, its light-mesh lights after them; one of `lamp_share`.
 fn shade(index: u32) {
     let surface = points[index];
     if surface.hit == 0u {
@@ -514,27 +535,30 @@ fn shade(index: u32) {
     let origin = offset_ray_origin(point.position, point.geometric_normal);
     let light_words = directory.header.light_words;
     let reach_base = index * light_words;
-    let first = formula_one(point, SHADED_BY_FORMULA_ONE, no_direct_light());
-    var radiance = first.radiance;
-    var total = 0u;
-    var blocker_rays = 0u;
     settle_kept(ball, origin, reach_base);
+    let first_tally = tally(ball, reach_base, 0u);
+    let total = first_tally.total;
+    add_count(0u, first_tally.candidates);
+    add_count(1u, first_tally.kept);
+    let tests = first_tally.candidates * directory.header.point_to_node_tests;
+    add_count(2u, tests);
+    let falls_back = total == 0u;
+    var first = no_direct_light();
+    for (var round = 0u; round < 1u + u32(falls_back); round++) {
+        let shading = select(SHADED_BY_FORMULA_ONE, SHADED_BY_LIGHT_MESH, round == 1u);
+        first = formula_one(point, shading, first);
+    }
+    if falls_back {
+        add_count(3u, 1u);
+        direct[index] = DirectLight(first.radiance, tests, first.class_rays);
+        return;
+    }
+    var radiance = first.radiance;
+    var blocker_rays = 0u;
     for (var word = 0u; word < light_words; word++) {
-        let t = tally(ball, reach_base, word);
-        if word == 0u {
-            total = t.total;
-            add_count(0u, t.candidates);
-            add_count(1u, t.kept);
-            let tests = t.candidates * directory.header.point_to_node_tests;
-            add_count(2u, tests);
-            if total == 0u {
-                add_count(3u, 1u);
-                let fallback = formula_one(point, SHADED_BY_LIGHT_MESH, first);
-                direct[index] = DirectLight(fallback.radiance, tests, fallback.class_rays);
-                return;
-            }
-            direct[index].other_rays = tests;
-            direct[index].class_rays = first.class_rays;
+        var t = first_tally;
+        if word > 0u {
+            t = tally(ball, reach_base, word);
         }
         // The lamps the set agrees on and the wide set does not; the
         // nearest blocked node of those and of the lamps the set disagrees
@@ -554,53 +578,38 @@ fn shade(index: u32) {
             if all(value == vec3<f32>(0.0)) {
                 continue;
             }
+            // The wide set disagrees on this lamp; or every node sees this
+            // light: where it grazes the surface a ray towards its point
+            // nearest the surface may find the point in a wedge of
+            // penumbra no node reaches; or the nodes disagree on it.
+            let in_wide = (wide >> bit & 1u) != 0u;
+            let seen_by_all = (t.all >> bit & 1u) != 0u;
+            var sizing = SIZED_BY_NOTHING;
+            if in_wide {
+                sizing = SIZED_BY_WIDE_BLOCKER;
+            } else if seen_by_all {
+                sizing = select(SIZED_BY_NOTHING, SIZED_BY_GRAZING_RAY, probes_grazing_lamps());
+            } else if directory.header.blocker_penumbra != 0u {
+                sizing = SIZED_BY_BLOCKER;
+            }
+            let share = lamp_share(point, origin, bit, light, sizing);
+            blocker_rays += share.rays;
+            // Where nothing sizes the wide set's lamp, the set's answer
+            // stands.
+            let agreed_hidden = in_wide && share.kind == SHARE_FIXED && !seen_by_all;
+            if share.kind == SHARE_HIDDEN || agreed_hidden {
+                continue;
+            }
             var term = value;
-            if (wide >> bit & 1u) != 0u {
-                // Where nothing sizes the penumbra the set's answer stands.
-                let share = blocker_share(point, origin, bit, light, true);
-                blocker_rays += share.rays;
-                let agreed_hidden = share.kind == SHARE_FIXED && (t.all >> bit & 1u) == 0u;
-                if share.kind == SHARE_HIDDEN || agreed_hidden {
-                    continue;
-                }
-                if share.kind == SHARE_PART {
-                    term = scale3(value, share.share);
-                }
-            } else if (t.all >> bit & 1u) != 0u {
-                // Every node sees this light: where it grazes the surface
-                // a ray towards its point nearest the surface may find
-                // the point in a wedge of penumbra no node reaches.
-                if probes_grazing_lamps() {
-                    let share = grazing_share(point, origin, light);
-                    blocker_rays += share.rays;
-                    if share.kind == SHARE_HIDDEN {
-                        continue;
-                    }
-                    if share.kind == SHARE_PART {
-                        term = scale3(value, share.share);
-                    }
-                }
-            } else {
-                // The nodes disagree on this light.
-                var share = BlockerShare(SHARE_FIXED, 0.0, 0u);
-                if directory.header.blocker_penumbra != 0u {
-                    share = blocker_share(point, origin, bit, light, false);
-                    blocker_rays += share.rays;
-                }
-                if share.kind == SHARE_HIDDEN {
-                    continue;
-                }
-                if share.kind == SHARE_PART {
-                    term = scale3(value, share.share);
-                } else if share.kind == SHARE_FIXED {
-                    term = scale3(value, div(f32(count_of(t, bit)), f32(total)));
-                }
+            if share.kind == SHARE_PART {
+                term = scale3(value, share.share);
+            } else if share.kind == SHARE_FIXED && !in_wide && !seen_by_all {
+                term = scale3(value, div(f32(count_of(t, bit)), f32(total)));
             }
             radiance += term;
             keep_term(light, term);
         }
     }
-    direct[index].radiance = radiance;
-    direct[index].other_rays += blocker_rays;
+    direct[index] = DirectLight(radiance, tests + blocker_rays, first.class_rays);
     add_count(4u, blocker_rays);
 }
