@@ -1,27 +1,22 @@
 //! One compute pass, end to end: its pipeline and bind group layout, its
 //! dispatch recorded into a command encoder (one invocation per item), and
-//! the answers read back. A pass reads its items (binding 1), optionally
-//! the uploaded world's arrays, and further read-only arrays, and writes
-//! one answer per item (binding 7). Passes that feed each other are
+//! the answers read back. A pass reads its items (binding [`ITEMS`]),
+//! optionally the uploaded world's arrays, and further read-only arrays,
+//! and writes one answer per item (binding [`ANSWERS`]). Passes that feed each other are
 //! recorded into one encoder and their intermediate answers never leave
 //! the GPU; [`WorldPass::run`] is the round trip for a single pass.
 
 use bytemuck::Pod;
 
 use super::context::{GpuContext, GpuError};
+use super::contract::{ANSWERS, ITEMS, PARAMS, WORKGROUP};
 use super::scene::GpuScene;
 use super::shaders::{self, Arithmetic, Entry};
 use super::spirv;
 
-/// Invocations per workgroup, as the shaders declare.
-pub const WORKGROUP: u32 = 64;
 /// Items per dispatch: within the 65535 workgroups a dispatch may have in
 /// one dimension, and a few tens of MiB of items.
 pub const BATCH: usize = 1 << 20;
-
-/// The binding of a pass's items; its answers go to [`ANSWERS`].
-pub const ITEMS: u32 = 1;
-const ANSWERS: u32 = 7;
 
 /// The pass's shader: our own SPIR-V where the context takes it (every
 /// float operation kept from fusing), else WGSL for wgpu to translate.
@@ -139,7 +134,7 @@ impl WorldPass {
         };
         let read_only = wgpu::BufferBindingType::Storage { read_only: true };
         let mut entries = vec![
-            buffer(0, wgpu::BufferBindingType::Uniform),
+            buffer(PARAMS, wgpu::BufferBindingType::Uniform),
             buffer(ITEMS, read_only),
             buffer(
                 ANSWERS,
@@ -209,7 +204,7 @@ impl WorldPass {
             WorldUse::Traces => scene.buffers().to_vec(),
             WorldUse::None => Vec::new(),
         };
-        let entries: Vec<wgpu::BindGroupEntry> = [(0, &params), (ANSWERS, answers)]
+        let entries: Vec<wgpu::BindGroupEntry> = [(PARAMS, &params), (ANSWERS, answers)]
             .into_iter()
             .chain(reads.iter().copied())
             .chain(world)

@@ -1,6 +1,8 @@
 // What every pass reads: its uniform. Each pass declares its own items
-// (binding 1) and answers (binding 7). Layouts are declared on the Rust
-// side as `Pod` structs; a test compares sizes and offsets.
+// (binding ITEMS) and answers (binding ANSWERS). Binding numbers, flag
+// bits, counter indices and codes are the prelude's (`contract.rs`);
+// layouts are declared on the Rust side as `Pod` structs, and a test
+// compares sizes and offsets.
 
 struct Params {
     // Items of the pass: rays, or shading points.
@@ -19,7 +21,4 @@ struct Params {
     layer_count: u32,
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
-
-// The mesh of a hit record that records no hit.
-const NO_MESH: u32 = 0xffffffffu;
+@group(0) @binding(PARAMS) var<uniform> params: Params;
