@@ -91,7 +91,7 @@ fn a_whitted_frame_waits_for_its_level_its_pixels_and_its_counters() {
     let pixels = u64::from(WIDTH * HEIGHT) * 16;
     let (counters, next_level_length) = (6 * 4, 4);
     for stats in &frames {
-        let gpu = stats.gpu.expect("the GPU backend reports its traffic");
+        let gpu = stats.gpu.as_ref().expect("the GPU backend reports its traffic").traffic;
         assert_eq!(gpu.waits, 3, "{gpu:?}");
         assert_eq!(
             gpu.bytes_down,
@@ -102,7 +102,8 @@ fn a_whitted_frame_waits_for_its_level_its_pixels_and_its_counters() {
     }
     // The world went up with the first frame; the second sends only what
     // changed (the camera's rays are made on the GPU).
-    let up = |i: usize| frames[i].gpu.unwrap().bytes_up;
+    let traffic = |i: usize| frames[i].gpu.as_ref().unwrap().traffic;
+    let up = |i: usize| traffic(i).bytes_up;
     assert!(up(1) < up(0), "first {} bytes up, then {}", up(0), up(1));
 }
 
@@ -111,7 +112,8 @@ fn a_light_mesh_frame_counts_its_waits_and_its_mask_traffic() {
     let Some(frames) = frames_on_the_gpu(&settings_for(Method::Lmm1), &[0.0, 0.5]) else {
         return;
     };
-    let (cold, steady) = (frames[0].gpu.unwrap(), frames[1].gpu.unwrap());
+    let traffic = |i: usize| frames[i].gpu.as_ref().unwrap().traffic;
+    let (cold, steady) = (traffic(0), traffic(1));
     let bricks = |stats: &FrameStats| stats.lightmesh.unwrap().bricks_uploaded;
     eprintln!(
         "cold {cold:?}, {} bricks up; steady {steady:?}, {} bricks up",

@@ -24,7 +24,7 @@ pub const MAX_NODE_COORDINATE: f32 = (1 << 28) as f32;
 pub const MAX_KI: f32 = 8.0;
 
 /// Most nodes along one axis of a half-ball's box.
-const MAX_SPAN: usize = 2 * MAX_KI as usize + 1;
+pub(crate) const MAX_SPAN: usize = 2 * MAX_KI as usize + 1;
 /// [`MAX_SPAN`] rounded up to whole rows of eight SIMD lanes.
 const PADDED_SPAN: usize = MAX_SPAN.next_multiple_of(8);
 

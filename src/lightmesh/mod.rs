@@ -25,7 +25,7 @@ pub mod persistent;
 mod region_tree;
 pub mod segments;
 pub mod spacing;
-mod wide;
+pub(crate) mod wide;
 
 use serde::Serialize;
 

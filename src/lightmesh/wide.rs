@@ -36,7 +36,7 @@ use super::LightMesh;
 use crate::render::light::RenderLight;
 
 /// Mesh steps per step of the wide set's lattice.
-const STEPS: i32 = 2;
+pub(crate) const STEPS: i32 = 2;
 // A wide node's mesh coordinates stay in range.
 const _: () = assert!(MAX_NODE_COORDINATE * (STEPS as f32) < i32::MAX as f32);
 

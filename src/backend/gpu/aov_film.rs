@@ -11,18 +11,14 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use super::context::{GpuContext, GpuError};
+use super::contract::{ENVIRONMENT, ITEMS, PATHS, POINT_LAYERS};
 use super::film::Film;
-use super::layered::{PointLayers, POINT_LAYERS};
-use super::pass::{answer_buffer, read_back, Dispatch, WorldPass, WorldUse, ITEMS};
+use super::layered::PointLayers;
+use super::pass::{answer_buffer, read_back, Dispatch, WorldPass, WorldUse};
 use super::scene::GpuScene;
 use super::shaders::Entry;
 use super::surface::LevelBuffers;
 use crate::backend::aov::{BandSamples, FirstHit, LightLayers};
-
-/// The camera rays of the points whose first hits are taken.
-const PATHS: u32 = 10;
-/// The frame's environment, for what no light brought (`unlit.wgsl`).
-const ENVIRONMENT: u32 = 22;
 
 /// `first_hits.wgsl`'s `FirstHit`: a [`FirstHit`] as the GPU writes it.
 #[repr(C)]

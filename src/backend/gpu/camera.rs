@@ -6,7 +6,8 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::context::{GpuContext, GpuError};
-use super::pass::{answer_buffer, Dispatch, WorldPass, WorldUse, ITEMS};
+use super::contract::ITEMS;
+use super::pass::{answer_buffer, Dispatch, WorldPass, WorldUse};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::surface::{LevelBuffers, PathRay};

@@ -16,8 +16,11 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::context::{GpuContext, GpuError};
+use super::contract::{
+    CLASS_SHIFT, ITEMS, LIGHTS, SHADED_BY_FORMULA_ONE, SHADED_BY_LIGHT_MESH, TESTS_SEGMENT,
+};
 use super::layered::{LayeredPass, PointLayers};
-use super::pass::{Dispatch, WorldUse, BATCH, ITEMS};
+use super::pass::{Dispatch, WorldUse, BATCH};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::surface::{LevelBuffers, SurfacePoint};
@@ -29,18 +32,6 @@ use crate::render::surface::ShadingPoint;
 use crate::render::FrameJob;
 use crate::settings::Method;
 use crate::stats::ClassRays;
-
-/// The binding of the frame's lights.
-const LIGHTS: u32 = 10;
-
-/// `omega.wgsl`'s `shading` bits: the integrator a light is shaded by,
-/// and whether formula (1) tests its segment.
-const SHADED_BY_FORMULA_ONE: u32 = 1;
-const SHADED_BY_LIGHT_MESH: u32 = 2;
-const TESTS_SEGMENT: u32 = 4;
-/// Where the plan's class of the light sits (two bits, its index in
-/// [`Shadows::ALL`]), for counting shadow rays by class.
-const CLASS_SHIFT: u32 = 3;
 
 /// Each of `job`'s lights' `shading` bits under `method`: its role in the
 /// frame's [`ShadowSplit`](crate::render::shadow_split::ShadowSplit), so

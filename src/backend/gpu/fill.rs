@@ -8,14 +8,15 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::context::{GpuContext, GpuError};
+use super::contract::{
+    DYNAMIC_BLOCKED, DYNAMIC_TESTED, KNOWN_VISIBLE, LIGHTS, STATIC_BLOCKED, TEST_DYNAMIC,
+    TEST_STATIC,
+};
 use super::direct::FrameLights;
 use super::pass::{WorldPass, WorldUse, BATCH};
 use super::scene::GpuScene;
 use super::shaders::Entry;
 use crate::lightmesh::segments::{Segment, SegmentAnswer};
-
-/// The binding of the frame's lights.
-const LIGHTS: u32 = 10;
 
 /// `fill_segments.wgsl`'s `FillSegment`.
 #[repr(C)]
@@ -26,13 +27,6 @@ pub struct FillSegment {
     flags: u32,
     _pad: [u32; 3],
 }
-
-const TEST_STATIC: u32 = 1;
-const KNOWN_VISIBLE: u32 = 2;
-const TEST_DYNAMIC: u32 = 4;
-const STATIC_BLOCKED: u32 = 1;
-const DYNAMIC_TESTED: u32 = 2;
-const DYNAMIC_BLOCKED: u32 = 4;
 
 impl From<&Segment> for FillSegment {
     fn from(segment: &Segment) -> FillSegment {

@@ -8,19 +8,16 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
 
 use super::context::{GpuContext, GpuError};
-use super::pass::{answer_buffer, read_back, Dispatch, WorldPass, WorldUse, ITEMS};
+use super::contract::{
+    COUNTERS, COUNTER_CLASS_RAYS, COUNTER_OTHER_RAYS, COUNTER_SHADING_POINTS, DIRECT, ENVIRONMENT,
+    FILM_COUNTERS, ITEMS,
+};
+use super::pass::{answer_buffer, read_back, Dispatch, WorldPass, WorldUse};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::surface::LevelBuffers;
 use crate::render::environment::Environment;
 use crate::stats::ClassRays;
-
-/// The direct light of a level's points, for the accumulation.
-const DIRECT: u32 = 10;
-/// The shading-point and shadow-segment counters.
-const COUNTERS: u32 = 18;
-/// The frame's background and ambient sky.
-const ENVIRONMENT: u32 = 22;
 
 /// `environment.wgsl`'s `Environment`: an [`Environment`] with flags for
 /// the parts that are on.
@@ -96,7 +93,7 @@ impl Film {
         let environment = EnvironmentRecord::from(environment);
         Ok(Film {
             samples: answer_buffer::<[f32; 4]>(context, "pixel samples", pixels * spp)?,
-            counters: answer_buffer::<[u32; 6]>(context, "counters", 1)?,
+            counters: answer_buffer::<[u32; FILM_COUNTERS as usize]>(context, "counters", 1)?,
             environment: storage(context, "environment", &[environment])?,
             pixels,
         })
@@ -153,14 +150,17 @@ impl Film {
         );
         let pixels: Vec<[f32; 4]> = read_back(context, encoder, &pixels, count)?;
         let encoder = context.device.create_command_encoder(&Default::default());
-        let [counters]: [[u32; 6]; 1] = read_back(context, encoder, &self.counters, 1)?
-            .try_into()
-            .map_err(|_| GpuError::Readback("no counters".into()))?;
+        let [counters]: [[u32; FILM_COUNTERS as usize]; 1] =
+            read_back(context, encoder, &self.counters, 1)?
+                .try_into()
+                .map_err(|_| GpuError::Readback("no counters".into()))?;
         Ok(Developed {
             pixels: pixels.into_iter().map(Vec4::from_array).collect(),
-            shading_points: counters[0] as u64,
-            other_rays: counters[1] as u64,
-            class_rays: ClassRays::new([2, 3, 4, 5].map(|at| counters[at] as u64)),
+            shading_points: counters[COUNTER_SHADING_POINTS as usize] as u64,
+            other_rays: counters[COUNTER_OTHER_RAYS as usize] as u64,
+            class_rays: ClassRays::new(std::array::from_fn(|class| {
+                counters[COUNTER_CLASS_RAYS as usize + class] as u64
+            })),
         })
     }
 }

@@ -8,13 +8,10 @@
 use std::sync::OnceLock;
 
 use super::context::{GpuContext, GpuError};
+use super::contract::POINT_LAYERS;
 use super::pass::{answer_buffer, Bound, Dispatch, WorldPass, WorldUse};
 use super::scene::storage;
 use super::shaders::Entry;
-
-/// The binding of the points' layer sums (`light_layers.wgsl`,
-/// `accumulate_layers.wgsl`).
-pub const POINT_LAYERS: u32 = 16;
 
 /// A level's points' terms summed per light layer: `layers` sums per
 /// point, in point order.

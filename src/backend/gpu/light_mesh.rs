@@ -20,11 +20,16 @@ use std::time::Instant;
 use glam::IVec3;
 
 use super::context::{GpuContext, GpuError};
+use super::contract::{
+    COUNTS, COUNT_BLOCKER_RAYS, COUNT_CANDIDATES, COUNT_FALLBACK, COUNT_INTERPOLATION_SET,
+    COUNT_POINT_TO_NODE_TESTS, DIRECTORY, FLAGS, GATHER_SOURCE, ITEMS, LIGHTS, LIGHT_MESH_COUNTERS,
+    LOOPS_CUT_SHORT, POOL, REACH,
+};
 use super::direct::FrameLights;
 use super::fill::FillPass;
 use super::layered::{LayeredPass, PointLayers};
 use super::mask_pool::MaskPool;
-use super::pass::{answer_buffer, read_back, Dispatch, WorldPass, WorldUse, ITEMS};
+use super::pass::{answer_buffer, read_back, Dispatch, WorldPass, WorldUse};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::surface::{LevelBuffers, SurfacePoint};
@@ -38,21 +43,10 @@ use crate::render::FrameJob;
 use crate::settings::Method;
 use crate::stats::FrameStats;
 
-/// Bindings beyond the points and answers: the lights, the points'
-/// reaching lights, the directory and the pool, formula (2)'s counters,
-/// the coverage's flags, and the points a gather reads from.
-const LIGHTS: u32 = 10;
-const REACH: u32 = 11;
-const DIRECTORY: u32 = 12;
-const POOL: u32 = 13;
-const COUNTS: u32 = 14;
-const FLAGS: u32 = 15;
-const GATHER_SOURCE: u32 = 10;
-
-/// Formula (2)'s counters: five (low, high) pairs of [`PointCounts`], then
-/// the points whose loops the adapter cut short (`light_mesh.wgsl`).
-const COUNTERS: usize = 11;
-const LOOPS_CUT_SHORT: usize = 10;
+/// Formula (2)'s counters, as u32 words: (low, high) pairs of
+/// [`PointCounts`], then the points whose loops the adapter cut short
+/// (`light_mesh.wgsl`).
+type Counters = [u32; LIGHT_MESH_COUNTERS as usize];
 
 /// The light mesh's pipelines, made once per run: coverage (which points
 /// the pool serves), gathering the points it does not, and formula (2).
@@ -127,7 +121,7 @@ impl<'m> LightMeshShading<'m> {
             point_to_node_tests: method.tests_point_to_node(),
             lanes: (job.shadows).lanes(method, lights, |role| role == LightRole::LightMesh),
             work: LightMeshStats::default(),
-            counts: answer_buffer::<[u32; COUNTERS]>(context, "light-mesh counters", 1)?,
+            counts: answer_buffer::<Counters>(context, "light-mesh counters", 1)?,
         })
     }
 
@@ -276,10 +270,10 @@ impl<'m> LightMeshShading<'m> {
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
         let encoder = context.device.create_command_encoder(&Default::default());
-        let [counts]: [[u32; COUNTERS]; 1] = read_back(context, encoder, &self.counts, 1)?
+        let [counts]: [Counters; 1] = read_back(context, encoder, &self.counts, 1)?
             .try_into()
             .expect("one counter record was read");
-        let points = counts[LOOPS_CUT_SHORT];
+        let points = counts[LOOPS_CUT_SHORT as usize];
         if points > 0 {
             return Err(GpuError::LoopsCutShort {
                 adapter: context.info.name.clone(),
@@ -287,15 +281,18 @@ impl<'m> LightMeshShading<'m> {
             }
             .into());
         }
-        let pair = |at: usize| counts[2 * at] as u64 | (counts[2 * at + 1] as u64) << 32;
+        let pair = |at: u32| {
+            let at = 2 * at as usize;
+            counts[at] as u64 | (counts[at + 1] as u64) << 32
+        };
         let counts = PointCounts {
-            candidates: pair(0),
-            interp_set: pair(1),
-            p2n_tests: pair(2),
-            fallback: pair(3),
+            candidates: pair(COUNT_CANDIDATES),
+            interp_set: pair(COUNT_INTERPOLATION_SET),
+            p2n_tests: pair(COUNT_POINT_TO_NODE_TESTS),
+            fallback: pair(COUNT_FALLBACK),
             // The shader walks every point's half-ball.
             settled: 0,
-            blocker_rays: pair(4),
+            blocker_rays: pair(COUNT_BLOCKER_RAYS),
             blocker_rays_remembered: 0,
             shadow_rays: Default::default(),
         };

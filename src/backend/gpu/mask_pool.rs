@@ -33,15 +33,11 @@ use glam::IVec3;
 use rustc_hash::FxHashMap;
 
 use super::context::{GpuContext, GpuError};
+use super::contract::GROUPS;
 use super::scene::storage;
 use crate::backend::RenderError;
-use crate::lightmesh::kernel::Kernel;
 use crate::lightmesh::masks::{BrickEnclosure, MaskStore, BRICK_NODES, BRICK_WORDS};
-use crate::lightmesh::penumbra::Penumbra;
 use crate::lightmesh::{LightMesh, LightMeshError};
-
-/// Groups of light words per node: visible, then valid.
-const GROUPS: usize = 2;
 
 /// `light_mesh.wgsl`'s `MeshHeader`: the lattice, the interpolation
 /// radius, the light words per node group, and the directory's size.
@@ -59,11 +55,11 @@ pub struct MeshHeader {
     pub point_to_node_tests: u32,
     /// The kernel's 1/r², as the CPU rounds it (`kernel::Weights`).
     pub inverse_radius_squared: f32,
-    /// 0 for the box kernel, 1 for the smooth one.
-    pub smooth_kernel: u32,
-    /// How lamps' sets are sized (`lightmesh.penumbra`): 0 for the fixed
-    /// radius, 1 by the blocker's distance, 2 by it and the wide set.
-    pub blocker_penumbra: u32,
+    /// The kernel's code (`contract::KERNEL_BOX`, `KERNEL_SMOOTH`).
+    pub kernel: u32,
+    /// How lamps' sets are sized (`lightmesh.penumbra`): its code
+    /// (`contract::PENUMBRA_FIXED`, `PENUMBRA_BLOCKER`, `PENUMBRA_WIDE`).
+    pub penumbra: u32,
     /// WGSL rounds the struct up to its vec3's alignment of 16 bytes.
     pub padding: u32,
 }
@@ -147,7 +143,8 @@ impl MaskPool {
 
     /// Bytes of one slot with `light_words` u32 words per node group.
     pub fn slot_bytes(light_words: usize) -> usize {
-        BRICK_NODES * GROUPS * light_words * size_of::<u32>() + 2 * BRICK_WORDS * size_of::<u64>()
+        BRICK_NODES * GROUPS as usize * light_words * size_of::<u32>()
+            + 2 * BRICK_WORDS * size_of::<u64>()
     }
 
     /// Brings every resident brick up to `mesh`'s store (invalidation
@@ -350,12 +347,9 @@ impl MaskPool {
             entry_mask: entries as u32 - 1,
             point_to_node_tests: point_to_node_tests as u32,
             inverse_radius_squared: weights.inverse_radius_squared(),
-            smooth_kernel: (weights.kernel() == Kernel::Smooth) as u32,
-            blocker_penumbra: match mesh.penumbra {
-                Penumbra::Fixed => 0,
-                Penumbra::Blocker => 1,
-                Penumbra::Wide => 2,
-            },
+            // The contract's codes are the enums' discriminants.
+            kernel: weights.kernel() as u32,
+            penumbra: mesh.penumbra as u32,
             padding: 0,
         };
         if !self.directory_stale && self.directory.as_ref().is_some_and(|(h, _)| *h == header) {

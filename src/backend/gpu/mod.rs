@@ -25,6 +25,7 @@
 mod aov_film;
 mod camera;
 mod context;
+mod contract;
 pub(crate) mod direct;
 pub mod fill;
 mod film;

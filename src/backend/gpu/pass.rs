@@ -1,8 +1,8 @@
 //! One compute pass, end to end: its pipeline and bind group layout, its
 //! dispatch recorded into a command encoder (one invocation per item), and
-//! the answers read back. A pass reads its items (binding 1), optionally
-//! the uploaded world's arrays, and further read-only arrays, and writes
-//! one answer per item (binding 7). Passes that feed each other are
+//! the answers read back. A pass reads its items (binding [`ITEMS`]),
+//! optionally the uploaded world's arrays, and further read-only arrays,
+//! and writes one answer per item (binding [`ANSWERS`]). Passes that feed each other are
 //! recorded into one encoder and their intermediate answers never leave
 //! the GPU; [`WorldPass::run`] is the round trip for a single pass.
 
@@ -11,19 +11,15 @@ use std::sync::OnceLock;
 use bytemuck::Pod;
 
 use super::context::{GpuContext, GpuError};
+use super::contract::{ANSWERS, ITEMS, PARAMS, WORKGROUP};
 use super::scene::{GpuScene, Params};
 use super::shaders::{self, Arithmetic, Entry};
 use super::spirv;
 
-/// Invocations per workgroup, as the shaders declare.
-pub const WORKGROUP: u32 = 64;
 /// Items per dispatch: within the 65535 workgroups a dispatch may have in
 /// one dimension, and a few tens of MiB of items.
 pub const BATCH: usize = 1 << 20;
 
-/// The binding of a pass's items; its answers go to [`ANSWERS`].
-pub const ITEMS: u32 = 1;
-const ANSWERS: u32 = 7;
 /// The size of each array an empty dispatch binds: more than any one
 /// record a shader reads from an array, as the layout test in
 /// `shaders.rs` sizes them.
@@ -148,7 +144,7 @@ impl WorldPass {
         };
         let read_only = wgpu::BufferBindingType::Storage { read_only: true };
         let mut bindings = vec![
-            buffer(0, read_only),
+            buffer(PARAMS, read_only),
             buffer(ITEMS, read_only),
             buffer(
                 ANSWERS,
@@ -249,7 +245,7 @@ impl WorldPass {
         let storage = wgpu::BufferUsages::STORAGE;
         let read_only = zeroed(EMPTY_BINDING_BYTES, storage);
         let buffers: Vec<(u32, wgpu::Buffer)> = (self.bindings.iter())
-            .filter(|binding| binding.binding != 0)
+            .filter(|binding| binding.binding != PARAMS)
             .filter(|binding| {
                 !matches!(
                     binding.ty,
@@ -263,7 +259,7 @@ impl WorldPass {
             .collect();
         let resource = |binding: u32| {
             let buffer = match binding {
-                0 => &params,
+                PARAMS => &params,
                 _ => (buffers.iter())
                     .find(|(writable, _)| *writable == binding)
                     .map_or(&read_only, |(_, buffer)| buffer),
@@ -327,7 +323,7 @@ impl WorldPass {
             WorldUse::Traces => scene.buffers().to_vec(),
             WorldUse::None => Vec::new(),
         };
-        let entries: Vec<wgpu::BindGroupEntry> = [(0, &params), (ANSWERS, answers)]
+        let entries: Vec<wgpu::BindGroupEntry> = [(PARAMS, &params), (ANSWERS, answers)]
             .into_iter()
             .chain(reads.iter().copied())
             .chain(world)

@@ -6,19 +6,11 @@
 //! only its length comes back.
 
 use super::context::{GpuContext, GpuError};
-use super::pass::{
-    answer_buffer, read_back, Dispatch, WorldPass, WorldUse, BATCH, ITEMS, WORKGROUP,
-};
+use super::contract::{BLOCK_OFFSETS, ITEMS, LOCAL_OFFSETS, SECOND_OUTPUT, SLOTS, WORKGROUP};
+use super::pass::{answer_buffer, read_back, Dispatch, WorldPass, WorldUse, BATCH};
 use super::scene::GpuScene;
 use super::shaders::Entry;
 use super::surface::{LevelBuffers, PathRay};
-
-/// Bindings beside items and answers (see the shaders).
-/// A pass's second output: the scatter's ray counts, the block scan's totals.
-const SECOND_OUTPUT: u32 = 18;
-const SLOTS: u32 = 19;
-const LOCAL_OFFSETS: u32 = 20;
-const BLOCK_OFFSETS: u32 = 21;
 
 /// The four pipelines, made once per run.
 pub struct ScatterPasses {

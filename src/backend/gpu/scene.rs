@@ -6,6 +6,9 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::context::{GpuContext, GpuError};
+use super::contract::{
+    BINARY_NODES, DYNAMIC_IDS, DYNAMIC_VERTICES, INSTANCES, STATIC_IDS, STATIC_VERTICES, WIDE_NODES,
+};
 use crate::accel::flat::{FlatDynamic, FlatStatic, FlatTriangles};
 use crate::accel::World;
 
@@ -101,19 +104,27 @@ impl GpuScene {
     }
 
     /// The bindings of `scene.wgsl`'s arrays.
-    pub const BINDINGS: [u32; 7] = [2, 3, 4, 5, 6, 8, 9];
+    pub const BINDINGS: [u32; 7] = [
+        WIDE_NODES,
+        BINARY_NODES,
+        STATIC_VERTICES,
+        STATIC_IDS,
+        INSTANCES,
+        DYNAMIC_VERTICES,
+        DYNAMIC_IDS,
+    ];
 
     /// The world's buffers at their [`GpuScene::BINDINGS`].
     pub fn buffers(&self) -> [(u32, &wgpu::Buffer); 7] {
         let (s, d) = (&self.static_part, &self.dynamic_part);
         [
-            (2, &s.nodes),
-            (3, &d.nodes),
-            (4, &s.vertices),
-            (5, &s.ids),
-            (6, &d.instances),
-            (8, &d.vertices),
-            (9, &d.ids),
+            (WIDE_NODES, &s.nodes),
+            (BINARY_NODES, &d.nodes),
+            (STATIC_VERTICES, &s.vertices),
+            (STATIC_IDS, &s.ids),
+            (INSTANCES, &d.instances),
+            (DYNAMIC_VERTICES, &d.vertices),
+            (DYNAMIC_IDS, &d.ids),
         ]
     }
 }

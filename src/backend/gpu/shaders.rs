@@ -1,7 +1,10 @@
 //! The WGSL of the compute passes, kept in `shaders/` as files of their own
 //! and put together here at build time: WGSL has no includes, so each
-//! entry point's module is the arithmetic prelude, the shared declarations
-//! and its own file, concatenated.
+//! entry point's module is the contract's constants
+//! ([`super::contract::prelude`]), the arithmetic prelude, the shared
+//! declarations and its own file, concatenated.
+
+use super::contract;
 
 /// How products, quotients and roots round: through f64 where the adapter
 /// has it (as the CPU rounds), else plain f32.
@@ -240,7 +243,8 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
             ],
         ),
     };
-    [prelude, COMMON]
+    let contract = contract::prelude();
+    [contract.as_str(), prelude, COMMON]
         .iter()
         .chain(tracing)
         .chain(own)
@@ -281,7 +285,7 @@ mod tests {
         use crate::lightmesh::lamp_disk::DISK;
         let shader = include_str!("shaders/light_mesh.wgsl");
         let list = shader
-            .split_once("const DISK = array<vec2<f32>, 32>(")
+            .split_once("const DISK = array<vec2<f32>, DISK_SAMPLES>(")
             .and_then(|(_, rest)| rest.split_once(");"))
             .expect("light_mesh.wgsl's DISK")
             .0;
@@ -299,7 +303,6 @@ mod tests {
                 .collect()
         };
         assert_eq!(bits(&points), bits(&DISK));
-        assert!(shader.contains(&format!("const DISK_SAMPLES: u32 = {}u;", DISK.len())));
     }
 
     /// The WGSL structs have the sizes of the Rust records uploaded into

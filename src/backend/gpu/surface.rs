@@ -15,7 +15,10 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Affine3A, Mat3, Vec3};
 
 use super::context::{GpuContext, GpuError};
-use super::pass::{answer_buffer, Bound, Dispatch, WorldPass, WorldUse, ITEMS};
+use super::contract::{
+    DEFORMED, HITS, ITEMS, MATERIALS, MESHES, MESH_WORDS, NONE, OBJECTS, TEXELS, TEXTURES,
+};
+use super::pass::{answer_buffer, Bound, Dispatch, WorldPass, WorldUse};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::trace::HitRecord;
@@ -25,19 +28,6 @@ use crate::render::frame::{FrameScene, PlacedObject};
 use crate::render::material::SurfaceMaterial;
 use crate::render::surface::ShadingPoint;
 use crate::scene::{Material, SceneDesc, TextureRef, Wrap};
-
-/// An index that names nothing (no texture, no deformed mesh).
-const NONE: u32 = u32::MAX;
-
-/// Bindings of the pass's inputs beside its path rays.
-const HITS: u32 = 10;
-const MESHES: u32 = 11;
-const MESH_WORDS: u32 = 12;
-const TEXTURES: u32 = 13;
-const TEXELS: u32 = 14;
-const OBJECTS: u32 = 15;
-const MATERIALS: u32 = 16;
-const DEFORMED: u32 = 17;
 
 /// `path.wgsl`'s `PathRay`: a ray of a camera path, the pixel sample its
 /// hit shades, the path's throughput and its Whitted depth.

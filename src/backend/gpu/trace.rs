@@ -8,7 +8,8 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec2;
 
 use super::context::{GpuContext, GpuError};
-use super::pass::{Dispatch, WorldPass, WorldUse, BATCH, ITEMS};
+use super::contract::{ITEMS, NO_MESH};
+use super::pass::{Dispatch, WorldPass, WorldUse, BATCH};
 use super::scene::GpuScene;
 use super::shaders::Entry;
 use super::surface::{LevelBuffers, PathRay};
@@ -42,7 +43,7 @@ pub struct HitRecord {
     pub t: f32,
     pub u: f32,
     pub v: f32,
-    /// 0 for the static mesh, 1 + i for instance i, `u32::MAX` for none.
+    /// 0 for the static mesh, 1 + i for instance i, [`NO_MESH`] for none.
     pub mesh: u32,
     pub slot: u32,
     /// The triangle's source, `(object, triangle)`.
@@ -54,7 +55,7 @@ pub struct HitRecord {
 impl HitRecord {
     fn mesh(&self) -> Option<MeshId> {
         match self.mesh {
-            u32::MAX => None,
+            NO_MESH => None,
             0 => Some(MeshId::Static),
             i => Some(MeshId::Instance(i - 1)),
         }

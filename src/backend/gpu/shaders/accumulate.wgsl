@@ -15,15 +15,15 @@ struct DirectLight {
     class_rays: vec4<u32>,
 }
 
-@group(0) @binding(1) var<storage, read> points: array<SurfacePoint>;
-@group(0) @binding(10) var<storage, read> direct: array<DirectLight>;
+@group(0) @binding(ITEMS) var<storage, read> points: array<SurfacePoint>;
+@group(0) @binding(DIRECT) var<storage, read> direct: array<DirectLight>;
 // Per sample of the band: radiance, and 1 in w where a camera ray hit.
-@group(0) @binding(7) var<storage, read_write> samples: array<vec4<f32>>;
+@group(0) @binding(ANSWERS) var<storage, read_write> samples: array<vec4<f32>>;
 // Shading points, the segments of no light's class, then formula (1)'s
 // shadow rays for each class of light.
-@group(0) @binding(18) var<storage, read_write> counters: array<atomic<u32>, 6>;
+@group(0) @binding(COUNTERS) var<storage, read_write> counters: array<atomic<u32>, FILM_COUNTERS>;
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
     if !starts_run(index) {
@@ -47,9 +47,9 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
         class_rays += light.class_rays;
     }
     samples[sample] = value;
-    atomicAdd(&counters[0], hits);
-    atomicAdd(&counters[1], other_rays);
-    for (var shadow_class = 0u; shadow_class < 4u; shadow_class++) {
-        atomicAdd(&counters[2u + shadow_class], class_rays[shadow_class]);
+    atomicAdd(&counters[COUNTER_SHADING_POINTS], hits);
+    atomicAdd(&counters[COUNTER_OTHER_RAYS], other_rays);
+    for (var shadow_class = 0u; shadow_class < SHADOW_CLASSES; shadow_class++) {
+        atomicAdd(&counters[COUNTER_CLASS_RAYS + shadow_class], class_rays[shadow_class]);
     }
 }

@@ -6,13 +6,13 @@
 // `accumulate.wgsl` adds the beauty (`sample_runs.wgsl`): the sums are the
 // CPU's, bit for bit.
 
-@group(0) @binding(1) var<storage, read> points: array<SurfacePoint>;
+@group(0) @binding(ITEMS) var<storage, read> points: array<SurfacePoint>;
 // Per sample of the band, `params.layer_count` light layers, then `other`.
-@group(0) @binding(7) var<storage, read_write> sample_layers: array<vec3<f32>>;
+@group(0) @binding(ANSWERS) var<storage, read_write> sample_layers: array<vec3<f32>>;
 // Per point of the level, its terms summed per light layer.
-@group(0) @binding(16) var<storage, read> point_layers: array<vec3<f32>>;
+@group(0) @binding(POINT_LAYERS) var<storage, read> point_layers: array<vec3<f32>>;
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn accumulate_layers(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
     if !starts_run(index) {

@@ -27,8 +27,8 @@ struct Camera {
     _pad: u32,
 }
 
-@group(0) @binding(1) var<storage, read> cameras: array<Camera>;
-@group(0) @binding(7) var<storage, read_write> camera_paths: array<PathRay>;
+@group(0) @binding(ITEMS) var<storage, read> cameras: array<Camera>;
+@group(0) @binding(ANSWERS) var<storage, read_write> camera_paths: array<PathRay>;
 
 // 64-bit words as (low, high).
 fn add64(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
@@ -123,7 +123,7 @@ fn film_position(camera: Camera, x: u32, y: u32, s: u32, index: vec2<u32>) -> ve
     return corner + jitter;
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn camera_rays(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= params.item_count {
         return;

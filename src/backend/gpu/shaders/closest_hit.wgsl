@@ -2,10 +2,10 @@
 // where nothing was hit). The static mesh first, then the dynamic
 // instances under the distance found, as `World::closest_hit`.
 
-@group(0) @binding(1) var<storage, read> paths: array<PathRay>;
-@group(0) @binding(7) var<storage, read_write> hits: array<HitRecord>;
+@group(0) @binding(ITEMS) var<storage, read> paths: array<PathRay>;
+@group(0) @binding(ANSWERS) var<storage, read_write> hits: array<HitRecord>;
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn closest_hit(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
     if index >= params.item_count {

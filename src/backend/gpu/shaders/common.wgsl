@@ -1,6 +1,8 @@
 // What every pass reads: its parameters. Each pass declares its own items
-// (binding 1) and answers (binding 7). Layouts are declared on the Rust
-// side as `Pod` structs; a test compares sizes and offsets.
+// (binding ITEMS) and answers (binding ANSWERS). Binding numbers, flag
+// bits, counter indices and codes are the prelude's (`contract.rs`);
+// layouts are declared on the Rust side as `Pod` structs, and a test
+// compares sizes and offsets.
 
 struct Params {
     // Items of the pass: rays, or shading points.
@@ -23,7 +25,5 @@ struct Params {
 // anew for each set of values its uniforms take (it inlines them as
 // constants), and the item and light counts change with every dispatch;
 // its first LMM1 frame waited minutes for those compiles.
-@group(0) @binding(0) var<storage, read> params: Params;
+@group(0) @binding(PARAMS) var<storage, read> params: Params;
 
-// The mesh of a hit record that records no hit.
-const NO_MESH: u32 = 0xffffffffu;

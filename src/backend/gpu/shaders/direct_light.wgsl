@@ -1,9 +1,9 @@
 // Formula (1) at a batch of shading points (`formula_one.wgsl`), one
 // invocation each.
-@group(0) @binding(1) var<storage, read> points: array<SurfacePoint>;
-@group(0) @binding(7) var<storage, read_write> direct: array<DirectLight>;
+@group(0) @binding(ITEMS) var<storage, read> points: array<SurfacePoint>;
+@group(0) @binding(ANSWERS) var<storage, read_write> direct: array<DirectLight>;
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn direct_light(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
     if index >= params.item_count {

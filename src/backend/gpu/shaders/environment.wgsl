@@ -9,4 +9,4 @@ struct Environment {
     sky: u32,
 }
 
-@group(0) @binding(22) var<storage, read> environment: Environment;
+@group(0) @binding(ENVIRONMENT) var<storage, read> environment: Environment;

@@ -9,26 +9,18 @@
 struct FillSegment {
     origin: vec3<f32>,
     light: u32,
-    // TEST_STATIC | KNOWN_VISIBLE | TEST_DYNAMIC.
+    // TEST_STATIC | KNOWN_VISIBLE | TEST_DYNAMIC (`contract.rs`); the
+    // answer has STATIC_BLOCKED | DYNAMIC_TESTED | DYNAMIC_BLOCKED.
     flags: u32,
     _pad0: u32,
     _pad1: u32,
     _pad2: u32,
 }
 
-const TEST_STATIC: u32 = 1u;
-const KNOWN_VISIBLE: u32 = 2u;
-const TEST_DYNAMIC: u32 = 4u;
+@group(0) @binding(ITEMS) var<storage, read> segments: array<FillSegment>;
+@group(0) @binding(ANSWERS) var<storage, read_write> answers: array<u32>;
 
-// Answer bits.
-const STATIC_BLOCKED: u32 = 1u;
-const DYNAMIC_TESTED: u32 = 2u;
-const DYNAMIC_BLOCKED: u32 = 4u;
-
-@group(0) @binding(1) var<storage, read> segments: array<FillSegment>;
-@group(0) @binding(7) var<storage, read_write> answers: array<u32>;
-
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn fill_segments(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
     if index >= params.item_count {

@@ -11,13 +11,13 @@ struct FirstHit {
     covered: u32,
 }
 
-@group(0) @binding(1) var<storage, read> points: array<SurfacePoint>;
+@group(0) @binding(ITEMS) var<storage, read> points: array<SurfacePoint>;
 // Per sample of the band.
-@group(0) @binding(7) var<storage, read_write> hits: array<FirstHit>;
+@group(0) @binding(ANSWERS) var<storage, read_write> hits: array<FirstHit>;
 // The camera rays the points were made from, in the same order.
-@group(0) @binding(10) var<storage, read> paths: array<PathRay>;
+@group(0) @binding(PATHS) var<storage, read> paths: array<PathRay>;
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn first_hits(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
     if index >= params.item_count {

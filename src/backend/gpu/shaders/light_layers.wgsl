@@ -6,7 +6,7 @@
 // level), and only the invocation of their point writes them.
 
 // Per point of the pass, `params.layer_count` sums.
-@group(0) @binding(16) var<storage, read_write> point_layers: array<vec3<f32>>;
+@group(0) @binding(POINT_LAYERS) var<storage, read_write> point_layers: array<vec3<f32>>;
 
 // Where the current point's row starts.
 var<private> point_row: u32;

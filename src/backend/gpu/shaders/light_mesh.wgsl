@@ -19,15 +19,15 @@
 // no per-light array is needed. Each term also goes to `keep_term` (the
 // `light` AOV's, or nothing).
 
-@group(0) @binding(1) var<storage, read> points: array<SurfacePoint>;
-@group(0) @binding(7) var<storage, read_write> direct: array<DirectLight>;
+@group(0) @binding(ITEMS) var<storage, read> points: array<SurfacePoint>;
+@group(0) @binding(ANSWERS) var<storage, read_write> direct: array<DirectLight>;
 // Per point, a bit per light that can reach it (`light_mesh_coverage.wgsl`).
-@group(0) @binding(11) var<storage, read> reach: array<u32>;
+@group(0) @binding(REACH) var<storage, read> reach: array<u32>;
 // Candidates, interpolation-set sizes, point-to-node segments, fallback
 // points and blocker rays, each as a (low, high) pair of u32; then the
-// points whose loops the adapter cut short.
-@group(0) @binding(14) var<storage, read_write> counts: array<atomic<u32>, 11>;
-const LOOPS_CUT_SHORT: u32 = 10u;
+// points whose loops the adapter cut short (the contract's COUNT_* and
+// LOOPS_CUT_SHORT).
+@group(0) @binding(COUNTS) var<storage, read_write> counts: array<atomic<u32>, LIGHT_MESH_COUNTERS>;
 
 // Whether the point keeps `node` in its interpolation set: LMM's step 3
 // (the segment from the point to the node is clear), or LMM1's stand-in
@@ -54,8 +54,7 @@ fn kept(node: vec3<i32>, origin: vec3<f32>, reach_base: u32) -> bool {
 // half-ball (one tally per 32 lights, and the blocker's search for the
 // nearest blocked node of each light the set disagrees on), so each
 // point-to-node segment is traced once, not once per walk. A half-ball
-// has at most MAX_SPAN³ candidates.
-const KEPT_WORDS: u32 = 154u; // ⌈17³ / 32⌉
+// has at most MAX_SPAN³ candidates, KEPT_WORDS words.
 var<private> kept_bits: array<u32, KEPT_WORDS>;
 
 fn settle_kept(ball: HalfBall, origin: vec3<f32>, reach_base: u32) {
@@ -133,7 +132,7 @@ fn node_weight(distance_squared: f32) -> u32 {
 
 // The same for a radius whose 1/r² is `inverse_radius_squared`.
 fn node_weight_at(distance_squared: f32, inverse_radius_squared: f32) -> u32 {
-    if directory.header.smooth_kernel == 0u {
+    if directory.header.kernel == KERNEL_BOX {
         return 1u;
     }
     let falloff = max(1.0 - mul(distance_squared, inverse_radius_squared), 0.0);
@@ -195,7 +194,7 @@ fn count_of(t: Tally, light: u32) -> u32 {
     return count;
 }
 
-// Adds `amount` to the 64-bit counter `which`.
+// Adds `amount` to the 64-bit count `which` (a COUNT_*).
 fn add_count(which: u32, amount: u32) {
     let low = atomicAdd(&counts[2u * which], amount);
     if low + amount < low {
@@ -205,8 +204,6 @@ fn add_count(which: u32, amount: u32) {
 
 // `lightmesh/penumbra.rs`: levels h·2^k for k in [FINEST_LEVEL,
 // COARSEST_LEVEL], their boundaries at √2·2^k of the mesh's radius.
-const FINEST_LEVEL: i32 = -3;
-const COARSEST_LEVEL: i32 = 3;
 const SQRT_2: f32 = 1.41421353816986083984375; // f32::consts::SQRT_2
 const MIN_POSITIVE: f32 = 1.17549435082228750797e-38; // f32::MIN_POSITIVE
 
@@ -243,8 +240,7 @@ fn blocker_hit(start: vec3<f32>, centre: vec3<f32>) -> BlockerHit {
 }
 
 // `lamp_disk::DISK`: the same points, written as the same f32 values.
-const DISK_SAMPLES: u32 = 32u;
-const DISK = array<vec2<f32>, 32>(
+const DISK = array<vec2<f32>, DISK_SAMPLES>(
     vec2<f32>(0.125, 0.0),
     vec2<f32>(-0.15964505, 0.14624794),
     vec2<f32>(0.024436234, -0.27843827),
@@ -490,7 +486,7 @@ fn level_share(point: ShadePoint, light: Light, blocker: BlockerHit, centre_visi
     return BlockerShare(SHARE_PART, div(f32(seen), f32(total)), rays);
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
     if index >= params.item_count {
@@ -538,10 +534,10 @@ fn shade(index: u32) {
     settle_kept(ball, origin, reach_base);
     let first_tally = tally(ball, reach_base, 0u);
     let total = first_tally.total;
-    add_count(0u, first_tally.candidates);
-    add_count(1u, first_tally.kept);
+    add_count(COUNT_CANDIDATES, first_tally.candidates);
+    add_count(COUNT_INTERPOLATION_SET, first_tally.kept);
     let tests = first_tally.candidates * directory.header.point_to_node_tests;
-    add_count(2u, tests);
+    add_count(COUNT_POINT_TO_NODE_TESTS, tests);
     let falls_back = total == 0u;
     var first = no_direct_light();
     for (var round = 0u; round < 1u + u32(falls_back); round++) {
@@ -549,7 +545,7 @@ fn shade(index: u32) {
         first = formula_one(point, shading, first);
     }
     if falls_back {
-        add_count(3u, 1u);
+        add_count(COUNT_FALLBACK, 1u);
         direct[index] = DirectLight(first.radiance, tests, first.class_rays);
         return;
     }
@@ -589,7 +585,7 @@ fn shade(index: u32) {
                 sizing = SIZED_BY_WIDE_BLOCKER;
             } else if seen_by_all {
                 sizing = select(SIZED_BY_NOTHING, SIZED_BY_GRAZING_RAY, probes_grazing_lamps());
-            } else if directory.header.blocker_penumbra != 0u {
+            } else if directory.header.penumbra != PENUMBRA_FIXED {
                 sizing = SIZED_BY_BLOCKER;
             }
             let share = lamp_share(point, origin, bit, light, sizing);
@@ -611,5 +607,5 @@ fn shade(index: u32) {
         }
     }
     direct[index] = DirectLight(radiance, tests + blocker_rays, first.class_rays);
-    add_count(4u, blocker_rays);
+    add_count(COUNT_BLOCKER_RAYS, blocker_rays);
 }

@@ -6,13 +6,13 @@
 // Only the points it leaves out go to the CPU for demand and fill: where
 // the masks are reused, a frame reads back a few points instead of all.
 
-@group(0) @binding(1) var<storage, read> points: array<SurfacePoint>;
+@group(0) @binding(ITEMS) var<storage, read> points: array<SurfacePoint>;
 // Per point, `light_words` u32 of reaching-light bits.
-@group(0) @binding(7) var<storage, read_write> reach: array<u32>;
+@group(0) @binding(ANSWERS) var<storage, read_write> reach: array<u32>;
 // A bit per point, set where the pool does not serve it yet; then a bit
 // per pool slot, set where a point read the slot's brick (the CPU then
 // keeps those bricks when it must evict).
-@group(0) @binding(15) var<storage, read_write> flags: array<atomic<u32>>;
+@group(0) @binding(FLAGS) var<storage, read_write> flags: array<atomic<u32>>;
 
 // Whether the pool holds every bit of `reach` (from `base`) that formula
 // (2) will read at `node`.
@@ -42,7 +42,7 @@ fn reaches_by_light_mesh(point: ShadePoint, light: Light) -> bool {
     return (light.shading & SHADED_BY_LIGHT_MESH) != 0u && arrival(point, light).reaches;
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn light_mesh_coverage(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
     if index >= params.item_count {

@@ -12,13 +12,13 @@ struct MeshHeader {
     light_words: u32,
     entry_mask: u32,
     point_to_node_tests: u32,
-    // The kernel's 1/r² (`kernel::Weights`), and 1 for the smooth kernel.
+    // The kernel's 1/r² (`kernel::Weights`), and the kernel: KERNEL_BOX
+    // or KERNEL_SMOOTH.
     inverse_radius_squared: f32,
-    smooth_kernel: u32,
-    // 0 for the fixed radius, 1 where sets are sized by the blocker
-    // (`lightmesh/penumbra.rs`), WIDE_PENUMBRA where the wide set is
-    // also asked.
-    blocker_penumbra: u32,
+    kernel: u32,
+    // How lamps' sets are sized (`lightmesh/penumbra.rs`): PENUMBRA_FIXED,
+    // PENUMBRA_BLOCKER, or PENUMBRA_WIDE where the wide set is also asked.
+    penumbra: u32,
 }
 
 struct Directory {
@@ -27,15 +27,11 @@ struct Directory {
     entries: array<vec4<i32>>,
 }
 
-@group(0) @binding(12) var<storage, read> directory: Directory;
-@group(0) @binding(13) var<storage, read> pool: array<u32>;
-const BRICK_NODES: u32 = 512u;
-// Per node, the lights it sees, then which of those bits are valid.
-const GROUPS: u32 = 2u;
-const VISIBLE: u32 = 0u;
-const VALID: u32 = 1u;
-// `MAX_KI` steps either side of the point and the point's own row.
-const MAX_SPAN: i32 = 17;
+@group(0) @binding(DIRECTORY) var<storage, read> directory: Directory;
+@group(0) @binding(POOL) var<storage, read> pool: array<u32>;
+// A slot holds BRICK_NODES nodes of GROUPS groups of light words: the
+// lights a node sees (VISIBLE), then which of those bits are valid
+// (VALID). A half-ball's box spans at most MAX_SPAN nodes on each axis.
 // 8 f32 epsilons, 2^-20.
 const ON_PLANE_EPSILONS: f32 = 9.5367431640625e-7;
 
@@ -81,16 +77,15 @@ fn half_ball_at(p: vec3<f32>, n: vec3<f32>, steps: i32) -> HalfBall {
 // `lightmesh/wide.rs`: a point also asks the half-ball of radius 2·kI·h on
 // the lattice of step 2h about the lamps its own set agrees on; where that
 // wide set disagrees on one, the lamp's share is sized by its blocker.
-const WIDE_STEPS: i32 = 2;
-const WIDE_PENUMBRA: u32 = 2u;
+// Its lattice has WIDE_STEPS mesh steps per step.
 
 fn asks_wide_set() -> bool {
-    return directory.header.blocker_penumbra == WIDE_PENUMBRA;
+    return directory.header.penumbra == PENUMBRA_WIDE;
 }
 
 // `Penumbra::probes_grazing_lamps`.
 fn probes_grazing_lamps() -> bool {
-    return directory.header.blocker_penumbra == WIDE_PENUMBRA;
+    return directory.header.penumbra == PENUMBRA_WIDE;
 }
 
 // Whether `light` has a lamp to size a penumbra by (`wide::lamps`).
@@ -100,7 +95,7 @@ fn is_lamp(light: Light) -> bool {
 
 // `wide::lamps`, word `word` (32 lights); none where penumbrae are fixed.
 fn lamp_bits(word: u32) -> u32 {
-    if directory.header.blocker_penumbra == 0u {
+    if directory.header.penumbra == PENUMBRA_FIXED {
         return 0u;
     }
     var bits = 0u;

@@ -2,9 +2,9 @@
 // word per ray, 1 where something lies on it in (0, t_max). The dynamic
 // part is the small one and goes first, as in `World::occluded`.
 
-@group(0) @binding(7) var<storage, read_write> occluded: array<u32>;
+@group(0) @binding(ANSWERS) var<storage, read_write> occluded: array<u32>;
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn any_hit(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
     if index >= params.item_count {

@@ -36,28 +36,21 @@ struct Light {
     layer: u32,
     // Which integrator shades it, whether formula (1) tests its segment,
     // and the plan's class of the light (`ShadowSplit`, as `direct.rs`'s
-    // `shading_flags` sets the bits below).
+    // `shading_flags` sets the contract's SHADED_BY_FORMULA_ONE,
+    // SHADED_BY_LIGHT_MESH and TESTS_SEGMENT bits).
     shading: u32,
     // The lamp's radius, which sizes its penumbrae
     // (`lightmesh/penumbra.rs`).
     lamp_radius: f32,
 }
 
-// Shaded by formula (1) (`whitted`, `auto`'s hard and unshadowed lights).
-const SHADED_BY_FORMULA_ONE: u32 = 1u;
-// Shaded by formula (2) (`lmm`, `lmm1`, `auto`'s soft lights).
-const SHADED_BY_LIGHT_MESH: u32 = 2u;
-// Formula (1) tests its shadow segment: every light but an unshadowed one.
-const TESTS_SEGMENT: u32 = 4u;
-// Bits 3–4: the plan's class of the light (none, unshadowed, hard, soft),
-// which its shadow rays are counted under.
-const CLASS_SHIFT: u32 = 3u;
-
+// Bits 3–4 (from CLASS_SHIFT): the plan's class of the light (none,
+// unshadowed, hard, soft), which its shadow rays are counted under.
 fn class_of(light: Light) -> u32 {
     return light.shading >> CLASS_SHIFT & 3u;
 }
 
-@group(0) @binding(10) var<storage, read> lights: array<Light>;
+@group(0) @binding(LIGHTS) var<storage, read> lights: array<Light>;
 
 // `PointBrdf::new`: the BRDF's factors that do not depend on the light.
 fn shade_point(s: SurfacePoint) -> ShadePoint {

@@ -7,4 +7,4 @@ struct Ray {
     _pad: f32,
 }
 
-@group(0) @binding(1) var<storage, read> rays: array<Ray>;
+@group(0) @binding(ITEMS) var<storage, read> rays: array<Ray>;

@@ -4,10 +4,10 @@
 // camera ray covered as alpha, or 1 behind a background. Samples per pixel: the band's samples
 // over its pixels.
 
-@group(0) @binding(1) var<storage, read> samples: array<vec4<f32>>;
-@group(0) @binding(7) var<storage, read_write> pixels: array<vec4<f32>>;
+@group(0) @binding(ITEMS) var<storage, read> samples: array<vec4<f32>>;
+@group(0) @binding(ANSWERS) var<storage, read_write> pixels: array<vec4<f32>>;
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
     let pixel = id.x;
     if pixel >= params.item_count {

@@ -1,15 +1,15 @@
 // Compaction, step 2: one workgroup turns the groups' totals into each
 // group's exclusive offset, with the grand total after the last.
 
-@group(0) @binding(1) var<storage, read> block_totals: array<u32>;
-@group(0) @binding(7) var<storage, read_write> block_offsets: array<u32>;
+@group(0) @binding(ITEMS) var<storage, read> block_totals: array<u32>;
+@group(0) @binding(ANSWERS) var<storage, read_write> block_offsets: array<u32>;
 
-var<workgroup> lane_sums: array<u32, 64>;
+var<workgroup> lane_sums: array<u32, WORKGROUP>;
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn scan_sums(@builtin(local_invocation_index) lane: u32) {
     let blocks = arrayLength(&block_offsets) - 1u;
-    let per_lane = (blocks + 63u) / 64u;
+    let per_lane = (blocks + WORKGROUP - 1u) / WORKGROUP;
     let first = lane * per_lane;
     let last = min(first + per_lane, blocks);
     var sum = 0u;
@@ -20,7 +20,7 @@ fn scan_sums(@builtin(local_invocation_index) lane: u32) {
     workgroupBarrier();
     if lane == 0u {
         var running = 0u;
-        for (var l = 0u; l < 64u; l++) {
+        for (var l = 0u; l < WORKGROUP; l++) {
             let own = lane_sums[l];
             lane_sums[l] = running;
             running += own;

@@ -3,9 +3,9 @@
 // two slots per point (reflection first), and how many it spawned. The
 // compaction passes then pack them in point order, as the CPU lists them.
 
-@group(0) @binding(1) var<storage, read> points: array<SurfacePoint>;
-@group(0) @binding(7) var<storage, read_write> slots: array<PathRay>;
-@group(0) @binding(18) var<storage, read_write> counts: array<u32>;
+@group(0) @binding(ITEMS) var<storage, read> points: array<SurfacePoint>;
+@group(0) @binding(ANSWERS) var<storage, read_write> slots: array<PathRay>;
+@group(0) @binding(SECOND_OUTPUT) var<storage, read_write> counts: array<u32>;
 
 // Below it a surface is a mirror (`material.rs`'s `MIRROR_ROUGHNESS`).
 const MIRROR_ROUGHNESS: f32 = 0.1;
@@ -42,7 +42,7 @@ fn path_ray(origin: vec3<f32>, direction: vec3<f32>, point: SurfacePoint, weight
     return PathRay(origin, infinity, direction, point.sample, weight, point.depth + 1u);
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn scatter(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
     if index >= params.item_count {

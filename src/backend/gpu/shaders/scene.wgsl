@@ -32,16 +32,16 @@ struct Instance {
     _pad: u32,
 }
 
-@group(0) @binding(2) var<storage, read> wide_nodes: array<WideNode>;
-@group(0) @binding(3) var<storage, read> binary_nodes: array<BinaryNode>;
+@group(0) @binding(WIDE_NODES) var<storage, read> wide_nodes: array<WideNode>;
+@group(0) @binding(BINARY_NODES) var<storage, read> binary_nodes: array<BinaryNode>;
 // Nine floats per triangle slot, in slot order: the static mesh's in
 // render space, and every instance's (from its `slot_offset`) in its
 // object space.
-@group(0) @binding(4) var<storage, read> static_vertices: array<f32>;
-@group(0) @binding(8) var<storage, read> dynamic_vertices: array<f32>;
+@group(0) @binding(STATIC_VERTICES) var<storage, read> static_vertices: array<f32>;
+@group(0) @binding(DYNAMIC_VERTICES) var<storage, read> dynamic_vertices: array<f32>;
 // Per slot its source (object, triangle), two words. The dynamic array
 // ends with the top level's members (the instance index of each of its
 // primitive slots), from `params.top_members_offset`.
-@group(0) @binding(5) var<storage, read> static_ids: array<u32>;
-@group(0) @binding(9) var<storage, read> dynamic_ids: array<u32>;
-@group(0) @binding(6) var<storage, read> instances: array<Instance>;
+@group(0) @binding(STATIC_IDS) var<storage, read> static_ids: array<u32>;
+@group(0) @binding(DYNAMIC_IDS) var<storage, read> dynamic_ids: array<u32>;
+@group(0) @binding(INSTANCES) var<storage, read> instances: array<Instance>;

@@ -66,20 +66,18 @@ struct MaterialRecord {
     _pad1: u32,
 }
 
-@group(0) @binding(1) var<storage, read> paths: array<PathRay>;
-@group(0) @binding(10) var<storage, read> hits: array<HitRecord>;
-@group(0) @binding(11) var<storage, read> meshes: array<MeshRecord>;
+@group(0) @binding(ITEMS) var<storage, read> paths: array<PathRay>;
+@group(0) @binding(HITS) var<storage, read> hits: array<HitRecord>;
+@group(0) @binding(MESHES) var<storage, read> meshes: array<MeshRecord>;
 // Triangle indices and material indices as words, positions, normals and
 // texture coordinates as the bits of their floats.
-@group(0) @binding(12) var<storage, read> mesh_words: array<u32>;
-@group(0) @binding(13) var<storage, read> textures: array<TextureRecord>;
-@group(0) @binding(14) var<storage, read> texels: array<vec4<f32>>;
-@group(0) @binding(15) var<storage, read> objects: array<ObjectRecord>;
-@group(0) @binding(16) var<storage, read> materials: array<MaterialRecord>;
-@group(0) @binding(17) var<storage, read> deformed: array<f32>;
-@group(0) @binding(7) var<storage, read_write> points: array<SurfacePoint>;
-
-const NONE: u32 = 0xffffffffu;
+@group(0) @binding(MESH_WORDS) var<storage, read> mesh_words: array<u32>;
+@group(0) @binding(TEXTURES) var<storage, read> textures: array<TextureRecord>;
+@group(0) @binding(TEXELS) var<storage, read> texels: array<vec4<f32>>;
+@group(0) @binding(OBJECTS) var<storage, read> objects: array<ObjectRecord>;
+@group(0) @binding(MATERIALS) var<storage, read> materials: array<MaterialRecord>;
+@group(0) @binding(DEFORMED) var<storage, read> deformed: array<f32>;
+@group(0) @binding(ANSWERS) var<storage, read_write> points: array<SurfacePoint>;
 
 fn word_vec3(offset: u32, index: u32) -> vec3<f32> {
     let base = offset + 3u * index;
@@ -248,7 +246,7 @@ fn surface_point(ray: PathRay, hit: HitRecord) -> SurfacePoint {
     return point;
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn surface(@builtin(global_invocation_id) id: vec3<u32>) {
     let index = id.x;
     if index >= params.item_count {
