@@ -343,10 +343,8 @@ impl Sequence {
             return Ok(frame.clone());
         }
         let file = &self.scene_file;
-        let light_mesh = if self
-            .shadows
-            .uses_light_mesh(settings.method, &placed.lights)
-        {
+        let method = self.shadows.resolve(settings.method, &placed.lights);
+        let light_mesh = if self.shadows.uses_light_mesh(method, &placed.lights) {
             let mesh = &mut self.light_mesh;
             Some(prepared_light_mesh(
                 mesh,
@@ -359,7 +357,7 @@ impl Sequence {
             None
         };
         let job = frame_job(&self.scene, &self.world, placed, settings, &self.shadows);
-        let frame = (backend.render(&job, settings.method, light_mesh, stats))
+        let frame = (backend.render(&job, method, light_mesh, stats))
             .map_err(|error| run_error(file, error))?;
         if let Some(mesh_stats) = &mut stats.lightmesh {
             mesh_stats.bits_loaded = self.light_mesh.take_bits_loaded();
@@ -431,7 +429,7 @@ fn run_error(file: &str, error: RenderError) -> RunError {
             source,
         },
         RenderError::Gpu(error) => RunError::Backend(error.into()),
-        error @ RenderError::NoLightMesh(_) => RunError::Render(error),
+        error @ RenderError::NoLightMesh => RunError::Render(error),
     }
 }
 
@@ -549,7 +547,8 @@ pub fn warm(job: &Job) -> Result<WarmStats, RunError> {
         return Err(RunError::WarmWithoutCache);
     }
     let (mut backend, mut sequence) = open(job)?;
-    if !sequence.shadows.uses_light_mesh(settings.method, &[]) {
+    let method = sequence.shadows.resolve(settings.method, &[]);
+    if !sequence.shadows.uses_light_mesh(method, &[]) {
         return Err(RunError::WarmWithoutLightMesh(settings.method));
     }
     let timeline = Timeline { fps: settings.fps };

@@ -32,10 +32,9 @@ use crate::backend::RenderError;
 use crate::lightmesh::interpolate::PointCounts;
 use crate::lightmesh::{LightMesh, LightMeshStats};
 use crate::render::omega::LightLanes;
-use crate::render::shadow_split::LightRole;
+use crate::render::shadow_split::{FrameMethod, LightRole};
 use crate::render::surface::ShadingPoint;
 use crate::render::FrameJob;
-use crate::settings::Method;
 use crate::stats::FrameStats;
 
 /// Bindings beyond the points and answers: the lights, the points'
@@ -117,7 +116,7 @@ impl<'m> LightMeshShading<'m> {
         context: &GpuContext,
         mesh: &'m mut LightMesh,
         pool: &'m mut MaskPool,
-        method: Method,
+        method: FrameMethod,
         job: &FrameJob,
     ) -> Result<LightMeshShading<'m>, RenderError> {
         let lights = &job.frame.lights;
