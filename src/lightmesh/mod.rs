@@ -24,8 +24,10 @@ pub mod penumbra;
 pub mod persistent;
 mod region_tree;
 pub mod segments;
+mod sight;
 pub mod spacing;
 mod wide;
+mod wide_ball;
 
 use serde::Serialize;
 
