@@ -21,7 +21,7 @@ use glam::Vec3;
 
 use super::light::RenderLight;
 use super::omega::LightLanes;
-use crate::plan::Shadows;
+use crate::plan::shadows::Shadows;
 use crate::settings::Method;
 
 /// The integrators a frame runs: the run's [`Method`] with `auto`
