@@ -357,10 +357,8 @@ impl Sequence {
             return Ok(frame.clone());
         }
         let file = &self.scene_file;
-        let light_mesh = if self
-            .shadows
-            .uses_light_mesh(settings.method, &placed.lights)
-        {
+        let method = self.shadows.resolve(settings.method, &placed.lights);
+        let light_mesh = if self.shadows.uses_light_mesh(method, &placed.lights) {
             let mesh = &mut self.light_mesh;
             Some(prepared_light_mesh(
                 mesh,
@@ -373,7 +371,7 @@ impl Sequence {
             None
         };
         let job = frame_job(&self.scene, &self.world, placed, settings, &self.shadows);
-        let frame = (backend.render(&job, settings.method, light_mesh, stats))
+        let frame = (backend.render(&job, method, light_mesh, stats))
             .map_err(|error| run_error(file, error))?;
         if let Some(mesh_stats) = &mut stats.lightmesh {
             mesh_stats.bits_loaded = self.light_mesh.take_bits_loaded();
@@ -382,20 +380,15 @@ impl Sequence {
         Ok(frame)
     }
 
-    /// Compiles the GPU pipelines the frames will need (`auto` as the plan
-    /// resolves it: the light mesh's where it shades some light from it),
-    /// reporting (compiled, of) to `progress`.
+    /// Compiles the GPU pipelines the frames will need (`auto` resolved
+    /// over the plan's lights), reporting (compiled, of) to `progress`.
     pub fn prepare_pipelines(
         &self,
         backend: &Backend,
         settings: &Settings,
         progress: impl FnMut(usize, usize),
     ) {
-        let method = match settings.method {
-            Method::Auto if self.shadows.uses_light_mesh(Method::Auto, &[]) => Method::Lmm1,
-            Method::Auto => Method::Whitted,
-            method => method,
-        };
+        let method = self.shadows.resolve(settings.method, &[]);
         backend.prepare_pipelines(method, &settings.aovs, progress);
     }
 
@@ -462,7 +455,7 @@ fn run_error(file: &str, error: RenderError) -> RunError {
             source,
         },
         RenderError::Gpu(error) => RunError::Backend(error.into()),
-        error @ RenderError::NoLightMesh(_) => RunError::Render(error),
+        error @ RenderError::NoLightMesh => RunError::Render(error),
     }
 }
 
@@ -583,7 +576,8 @@ pub fn warm(job: &Job) -> Result<WarmStats, RunError> {
         return Err(RunError::WarmWithoutCache);
     }
     let (mut backend, mut sequence) = open(job)?;
-    if !sequence.shadows.uses_light_mesh(settings.method, &[]) {
+    let method = sequence.shadows.resolve(settings.method, &[]);
+    if !sequence.shadows.uses_light_mesh(method, &[]) {
         return Err(RunError::WarmWithoutLightMesh(settings.method));
     }
     // A farm's warm step fills the pipeline cache as well as the masks':

@@ -175,17 +175,12 @@ pub enum Method {
 }
 
 impl Method {
-    /// Whether frames shade from a light mesh (LMM, LMM1), which the
-    /// sequence makes on the first frame and keeps for the next ones.
-    /// (`auto` does for its soft lights: see `ShadowSplit::uses_light_mesh`.)
+    /// Whether every frame shades from a light mesh (LMM, LMM1), which
+    /// the sequence makes on the first frame and keeps for the next ones.
+    /// (`auto` does where a frame has soft lights: see
+    /// `ShadowSplit::resolve`.)
     pub fn uses_light_mesh(self) -> bool {
         matches!(self, Method::Lmm | Method::Lmm1)
-    }
-
-    /// Whether formula (2) keeps only the nodes a point sees (LMM's step 3,
-    /// one point-to-node segment per candidate); LMM1 keeps them all.
-    pub fn tests_point_to_node(self) -> bool {
-        self == Method::Lmm
     }
 }
 

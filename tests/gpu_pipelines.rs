@@ -95,7 +95,13 @@ fn a_second_run_makes_its_pipelines_from_the_cache_and_a_damaged_one_is_ignored(
     let (_, first) = render(dir.path(), "first", &with_cache);
     let made = pipelines(&first);
     let names: Vec<&str> = made.iter().map(|(name, _)| name.as_str()).collect();
-    for needed in ["camera_rays", "closest_hit", "surface", "direct_light", "resolve"] {
+    for needed in [
+        "camera_rays",
+        "closest_hit",
+        "surface",
+        "direct_light",
+        "resolve",
+    ] {
         assert!(names.contains(&needed), "{needed} in {names:?}");
     }
     for unneeded in ["light_mesh", "fill_segments", "any_hit", "first_hits"] {
@@ -103,7 +109,10 @@ fn a_second_run_makes_its_pipelines_from_the_cache_and_a_damaged_one_is_ignored(
     }
     assert!(made.iter().all(|(_, cached)| !cached), "{made:?}");
     if !keeps_a_pipeline_cache(&first) {
-        eprintln!("skipped the cache's checks: {} keeps none", first["adapter"]);
+        eprintln!(
+            "skipped the cache's checks: {} keeps none",
+            first["adapter"]
+        );
         return;
     }
     let files = cache_files(&cache);
@@ -188,7 +197,9 @@ fn a_run_compiles_what_its_frames_need_before_the_first() {
     settings.lightmesh.h = Some(0.25);
     let sequence = Sequence::new(lamp_over_a_floor(), "lamp".into()).unwrap();
     let mut reported = Vec::new();
-    sequence.prepare_pipelines(&gpu, &settings, |compiled, of| reported.push((compiled, of)));
+    sequence.prepare_pipelines(&gpu, &settings, |compiled, of| {
+        reported.push((compiled, of))
+    });
     let of = reported.last().expect("progress").1;
     let expected: Vec<(usize, usize)> = (0..=of).map(|compiled| (compiled, of)).collect();
     assert_eq!(reported, expected, "0 of n first, then one by one");
@@ -196,11 +207,19 @@ fn a_run_compiles_what_its_frames_need_before_the_first() {
     let first = render_frame(&mut gpu, &settings);
     let prepared = made_in(&first);
     assert_eq!(prepared.len(), of, "{prepared:?}");
-    for needed in ["light_mesh_coverage", "gather_points", "fill_segments", "light_mesh"] {
+    for needed in [
+        "light_mesh_coverage",
+        "gather_points",
+        "fill_segments",
+        "light_mesh",
+    ] {
         assert!(prepared.contains(&needed), "{needed} in {prepared:?}");
     }
     assert!(!prepared.contains(&"direct_light"), "{prepared:?}");
-    assert_eq!(made_in(&render_frame(&mut gpu, &settings)), Vec::<&str>::new());
+    assert_eq!(
+        made_in(&render_frame(&mut gpu, &settings)),
+        Vec::<&str>::new()
+    );
 
     settings.method = Method::Whitted;
     let whitted = render_frame(&mut gpu, &settings);

@@ -91,7 +91,11 @@ fn a_whitted_frame_waits_for_its_level_its_pixels_and_its_counters() {
     let pixels = u64::from(WIDTH * HEIGHT) * 16;
     let (counters, next_level_length) = (6 * 4, 4);
     for stats in &frames {
-        let gpu = stats.gpu.as_ref().expect("the GPU backend reports its traffic").traffic;
+        let gpu = stats
+            .gpu
+            .as_ref()
+            .expect("the GPU backend reports its traffic")
+            .traffic;
         assert_eq!(gpu.waits, 3, "{gpu:?}");
         assert_eq!(
             gpu.bytes_down,

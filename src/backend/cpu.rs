@@ -28,10 +28,9 @@ use crate::render::environment::Environment;
 use crate::render::light_terms::{PointTerms, TermLog};
 use crate::render::omega::LightLanes;
 use crate::render::scatter::secondary_rays;
-use crate::render::shadow_split::LightRole;
+use crate::render::shadow_split::{FrameMethod, LightRole};
 use crate::render::surface::ShadingPoint;
 use crate::render::{area, whitted, FrameJob};
-use crate::settings::Method;
 use crate::stats::FrameStats;
 
 /// Renders frames on a rayon pool of its own.
@@ -52,13 +51,13 @@ impl CpuBackend {
     }
 
     /// Renders one frame by `method`, with the AOV layers `job` asks for;
-    /// stage times, ray and point counts go to `stats`. The light-mesh
-    /// methods shade from `light_mesh` (an error without one); the other
-    /// methods ignore it.
+    /// stage times, ray and point counts go to `stats`. A light-mesh frame
+    /// shades from `light_mesh` (an error without one); the others ignore
+    /// it.
     pub fn render(
         &self,
         job: &FrameJob,
-        method: Method,
+        method: FrameMethod,
         light_mesh: Option<&mut LightMesh>,
         stats: &mut FrameStats,
     ) -> Result<RenderedFrame, RenderError> {
@@ -75,17 +74,16 @@ impl CpuBackend {
     fn render_keeping<T: PointTerms>(
         &self,
         job: &FrameJob,
-        method: Method,
+        method: FrameMethod,
         mut light_mesh: Option<&mut LightMesh>,
         stats: &mut FrameStats,
     ) -> Result<RenderedFrame, RenderError> {
         let mut counts = PointCounts::default();
         let mut lightmesh = LightMeshStats::default();
         let aovs = AovFrame::new(job);
-        let frame = self.render_bands(job, aovs, stats, |lanes, rows, points, stats| {
+        let frame = self.render_bands(job, aovs, stats, |rows, points, stats| {
             let (shaded, terms, band_counts) = shade_by_method::<T>(
                 job,
-                lanes,
                 rows,
                 points,
                 method,
@@ -120,9 +118,10 @@ impl CpuBackend {
     /// (formula (1) with V = 1): the light each pixel would get without
     /// shadows, against which the study measures how shadowed a pixel is.
     pub fn render_unshadowed(&self, job: &FrameJob, stats: &mut FrameStats) -> Image {
-        let unshadowed = self.render_bands(job, None, stats, |lanes, _, points, stats| {
+        let lanes = LightLanes::new(&job.frame.lights);
+        let unshadowed = self.render_bands(job, None, stats, |_, points, stats| {
             let shade = |_: &mut (), _, point: &ShadingPoint, sum: &mut Vec3| {
-                *sum = whitted::unshadowed_light(point, lanes);
+                *sum = whitted::unshadowed_light(point, &lanes);
                 PointCounts::default()
             };
             let (shaded, sums, _) = shade_stage(points, &job.environment, stats, || (), shade);
@@ -144,7 +143,6 @@ impl CpuBackend {
         mut aovs: Option<AovFrame>,
         stats: &mut FrameStats,
         mut shade: impl FnMut(
-                &LightLanes,
                 std::ops::Range<u32>,
                 &[ShadingPoint],
                 &mut FrameStats,
@@ -153,11 +151,10 @@ impl CpuBackend {
     ) -> Result<RenderedFrame, E> {
         self.pool.install(|| {
             let mut pixels = Vec::with_capacity((job.width * job.height) as usize);
-            let lanes = LightLanes::new(&job.frame.lights);
             for rows in bands(job) {
                 let band_samples = ((rows.end - rows.start) * job.width * job.spp) as usize;
                 let (points, primary_count) = hits(job, rows.clone(), stats);
-                let (shaded, terms) = shade(&lanes, rows.clone(), &points, stats)?;
+                let (shaded, terms) = shade(rows.clone(), &points, stats)?;
                 stats.shading_points += points.len() as u64;
                 let start = Instant::now();
                 pixels.extend(resolve(job, band_samples, &points, primary_count, &shaded));
@@ -244,13 +241,11 @@ fn hits(
 /// classes (for the lights shaded from the light mesh, demand and fill
 /// first): each point's value, the light terms kept as `T` keeps them,
 /// and what shading cost.
-#[allow(clippy::too_many_arguments)]
 fn shade_by_method<T: PointTerms>(
     job: &FrameJob,
-    lanes: &LightLanes,
     rows: std::ops::Range<u32>,
     points: &[ShadingPoint],
-    method: Method,
+    method: FrameMethod,
     light_mesh: Option<&mut LightMesh>,
     stats: &mut FrameStats,
     lightmesh: &mut LightMeshStats,
@@ -264,11 +259,8 @@ fn shade_by_method<T: PointTerms>(
         })
     };
     let (shaded, terms, band_counts) = match (method, light_mesh) {
-        (Method::Whitted, _) => formula_one_stage(job, points, lanes, stats),
-        (Method::Auto, _) if !shadows.uses_light_mesh(method, lights) => {
-            formula_one_stage(job, points, &formula_one(), stats)
-        }
-        (Method::Area, _) => {
+        (FrameMethod::FormulaOne, _) => formula_one_stage(job, points, &formula_one(), stats),
+        (FrameMethod::Lamps, _) => {
             // Lamp samples are seeded by the sample's index in the whole
             // image; `point.sample` counts from the band's first row.
             let band_start = rows.start as u64 * job.width as u64 * job.spp as u64;
@@ -285,27 +277,17 @@ fn shade_by_method<T: PointTerms>(
                 },
             )
         }
-        (Method::Lmm | Method::Lmm1, Some(mesh)) => {
-            let mesh_stage = MeshStage {
-                lanes,
-                point_to_node_tests: method.tests_point_to_node(),
-                formula_one_first: None,
-            };
-            mesh_stage.shade(job, points, mesh, stats, lightmesh)?
-        }
-        (Method::Auto, Some(mesh)) => {
+        (FrameMethod::LightMesh { .. }, Some(mesh)) => {
             let formula_one = shadows.uses_formula_one(method, lights).then(formula_one);
             let mesh_lanes = shadows.lanes(method, lights, |role| role == LightRole::LightMesh);
             let mesh_stage = MeshStage {
                 lanes: &mesh_lanes,
-                point_to_node_tests: false,
+                point_to_node_tests: method.tests_point_to_node(),
                 formula_one_first: formula_one.as_ref(),
             };
             mesh_stage.shade(job, points, mesh, stats, lightmesh)?
         }
-        (Method::Lmm | Method::Lmm1 | Method::Auto, None) => {
-            return Err(RenderError::NoLightMesh(method))
-        }
+        (FrameMethod::LightMesh { .. }, None) => return Err(RenderError::NoLightMesh),
     };
     stats.shadow_classes.add_rays(band_counts.shadow_rays);
     // Every occlusion segment is a shadow ray: formula (1)'s, the fill's
@@ -341,8 +323,10 @@ fn formula_one_stage<T: PointTerms>(
 /// The light-mesh stages (demand, fill, LMM1's enclosure, formula (2))
 /// for the lights `lanes` hold powered; with `formula_one_first`, each
 /// point first gets formula (1)'s terms of the lights those lanes hold
-/// (`auto`'s hard and unshadowed lights), so a point's terms are summed
-/// in one fixed order.
+/// (the hard and unshadowed lights of [`MeshLights::Soft`]), so a
+/// point's terms are summed in one fixed order.
+///
+/// [`MeshLights::Soft`]: crate::render::shadow_split::MeshLights::Soft
 struct MeshStage<'l> {
     lanes: &'l LightLanes,
     point_to_node_tests: bool,

@@ -21,8 +21,9 @@ pub use gpu::{GpuBackend, GpuError};
 use crate::lightmesh::{LightMesh, LightMeshError};
 use crate::output::RenderedFrame;
 use crate::plan::Shadows;
+use crate::render::shadow_split::FrameMethod;
 use crate::render::FrameJob;
-use crate::settings::{Aov, BackendKind, Method};
+use crate::settings::{Aov, BackendKind};
 use crate::stats::FrameStats;
 
 /// Sets `stats`' mask bits per shadow class: the (node, light) bits
@@ -54,10 +55,10 @@ pub enum RenderError {
     /// The light mesh refused the frame (a setting the scene cannot meet).
     #[error(transparent)]
     LightMesh(#[from] LightMeshError),
-    /// A light-mesh method was asked for without the light mesh it shades
-    /// from: the caller's mistake, never the scene's.
-    #[error("--method {0} shades from a light mesh, and the frame came without one")]
-    NoLightMesh(Method),
+    /// A frame that shades lights from the light mesh came without one:
+    /// the caller's mistake, never the scene's.
+    #[error("the frame shades lights from a light mesh, and came without one")]
+    NoLightMesh,
     #[error(transparent)]
     Gpu(#[from] GpuError),
 }
@@ -107,7 +108,7 @@ impl Backend {
     /// [`GpuBackend::prepare_pipelines`]); nothing on the CPU.
     pub fn prepare_pipelines(
         &self,
-        method: Method,
+        method: FrameMethod,
         aovs: &[Aov],
         progress: impl FnMut(usize, usize),
     ) {
@@ -138,14 +139,17 @@ impl Backend {
         }
     }
 
-    /// Renders one frame by `method`, with the AOV layers `job` asks for;
-    /// stage times, ray and point counts go to `stats`. The light-mesh methods shade from `light_mesh`, which
-    /// the caller keeps across frames so that its masks are reused; the
-    /// other methods ignore it.
+    /// Renders one frame by `method` (the run's method resolved for the
+    /// frame: [`ShadowSplit::resolve`]), with the AOV layers `job` asks
+    /// for; stage times, ray and point counts go to `stats`. A light-mesh
+    /// frame shades from `light_mesh`, which the caller keeps across
+    /// frames so that its masks are reused; the others ignore it.
+    ///
+    /// [`ShadowSplit::resolve`]: crate::render::shadow_split::ShadowSplit::resolve
     pub fn render(
         &mut self,
         job: &FrameJob,
-        method: Method,
+        method: FrameMethod,
         light_mesh: Option<&mut LightMesh>,
         stats: &mut FrameStats,
     ) -> Result<RenderedFrame, RenderError> {

@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
 use super::masks::{parity, split, BRICK_NODES};
-use super::wide::{self, WideBall};
+use super::wide_ball::{self, WideBall};
 use super::{LightMesh, LightMeshError};
 use crate::render::omega::{LightLanes, PointLanes, LANES};
 use crate::render::surface::ShadingPoint;
@@ -128,7 +128,7 @@ impl LightMesh {
         let brick_limit = self.memory_limit / table_bytes;
         let too_large = |bricks: usize| self.too_large(bricks.saturating_mul(table_bytes));
         let wide = (self.penumbra.asks_wide_set())
-            .then(|| (WideBall::of(self), wide::lamps(lights.lights(), words)));
+            .then(|| (WideBall::of(self), wide_ball::lamps(lights.lights(), words)));
         let tables = points
             .par_chunks(CHUNK)
             .zip(reach.par_chunks(CHUNK * words))

@@ -17,6 +17,7 @@ use super::kernel::{Kernel, Weights};
 use super::lamp_disk;
 use super::masks::BrickCache;
 use super::penumbra::{self, LevelScratch};
+use super::sight::Sight;
 use super::wide::WideScratch;
 use super::{LightMesh, LightMeshStats};
 use crate::accel::offset::offset_ray_origin;
@@ -107,49 +108,6 @@ struct InterpolationSet {
     /// The kernel's weight of each node.
     weights: Vec<u32>,
     sight: Sight,
-}
-
-/// What the nodes of a set see of the lights asked about.
-#[derive(Default)]
-pub(super) struct Sight {
-    /// The visible-light words of each node, node after node.
-    pub visible: Vec<u64>,
-    /// Per light word: lights visible from every node, from some node.
-    pub all: Vec<u64>,
-    pub any: Vec<u64>,
-}
-
-impl Sight {
-    /// What `nodes` see of the lights `asked`, read through `bricks`;
-    /// every bit it reads was filled from the frame's demand.
-    pub fn tally(&mut self, nodes: &[IVec3], asked: &[u64], bricks: &mut BrickCache) {
-        self.visible.clear();
-        self.all.clear();
-        self.all.extend_from_slice(asked);
-        self.any.clear();
-        self.any.resize(asked.len(), 0);
-        for &node in nodes {
-            let mask = bricks.mask(node);
-            for (word, &asked) in asked.iter().enumerate() {
-                debug_assert_eq!(
-                    mask.map_or(0, |m| m.valid(word)) & asked,
-                    asked,
-                    "formula (2) read a mask bit that the fill stage did not compute"
-                );
-                let seen = mask.map_or(0, |m| m.visible(word)) & asked;
-                self.visible.push(seen);
-                self.all[word] &= seen;
-                self.any[word] |= seen;
-            }
-        }
-    }
-
-    /// Whether each node, in order, sees light number `light`.
-    pub fn sees(&self, light: usize) -> impl Iterator<Item = bool> + '_ {
-        let words = self.all.len();
-        let (word, bit) = (light / 64, light % 64);
-        (self.visible.iter().skip(word).step_by(words)).map(move |&seen| seen >> bit & 1 == 1)
-    }
 }
 
 impl LightMesh {

@@ -11,9 +11,24 @@
 //! Each layer holds `ceil(nL / 64)` words of bits and as many of validity per
 //! node, in sparse 8×8×8 bricks in a hash map keyed by brick coordinates.
 //! Only nodes some shading point asked for ever get a brick, so the lattice
-//! has no extent and no up-front cost. The fill stage is the only writer
-//! (invalidation only clears validity); the shading stage reads through
-//! shared references and takes no locks.
+//! has no extent and no up-front cost.
+//!
+//! The store is the [`LightMesh`](super::LightMesh)'s own field, so it is
+//! written only through `&mut LightMesh`, by one stage at a time, never
+//! while a point is shaded; shading reads through shared references and
+//! takes no locks. Four stages write it:
+//! - invalidation (`super::invalidate`, before a frame) only clears
+//!   validity bits;
+//! - the disk cache's import (`super::cache`, when the mesh is made) sets
+//!   static bits an earlier run computed;
+//! - the fill sets the bits the frame demanded: on the CPU
+//!   (`super::fill`), or merging the answers of the GPU's fill
+//!   (`super::segments`);
+//! - LMM1's enclosure stage (`super::enclosure`, after the fill) sets
+//!   enclosure flags, never a visibility bit.
+//!
+//! A bit set by any of them has the value the fill would compute, which
+//! is what keeps reuse exact. The GPU's mask pool only mirrors the store.
 
 use glam::IVec3;
 use rustc_hash::FxHashMap;

@@ -4,10 +4,11 @@
 //!
 //! In a frame it takes three stages after the hits are known: `demand`
 //! (which (node, light) bits the shading points need), `fill` (compute the
-//! missing ones, the only writer of the masks) and `shade` (formula (2),
-//! with or without the point-to-node tests of LMM). LMM1 runs one more,
-//! `enclosure`, after the fill: which nodes lie inside closed geometry,
-//! which its formula (2) leaves out.
+//! missing ones, the only stage that sets visibility bits within a frame)
+//! and `shade` (formula (2), with or without the point-to-node tests of
+//! LMM). LMM1 runs one more, `enclosure`, after the fill: which nodes lie
+//! inside closed geometry, which its formula (2) leaves out. Who else
+//! writes the masks, and when, is in [`masks`].
 
 mod agreement;
 pub mod cache;
@@ -24,8 +25,10 @@ pub mod penumbra;
 pub mod persistent;
 mod region_tree;
 pub mod segments;
+mod sight;
 pub mod spacing;
-pub(crate) mod wide;
+mod wide;
+pub(crate) mod wide_ball;
 
 use serde::Serialize;
 

@@ -5,9 +5,10 @@ use std::fmt::Write;
 
 use serde::{Serialize, Serializer};
 
-use super::{LightPlan, Plan, Shadows};
+use super::{LightPlan, Plan};
+use crate::render::shadow_split::{LightRole, ShadowSplit};
 use crate::schedule::FrameSet;
-use crate::settings::{Method, Settings};
+use crate::settings::Settings;
 
 /// What one frame costs at most, by the plan: every figure an upper bound
 /// for primary hits (secondary rays add to them where mirrors and glass
@@ -31,19 +32,17 @@ impl WorkEstimate {
     pub fn of(settings: &Settings, lights: &[LightPlan]) -> WorkEstimate {
         let points =
             u64::from(settings.width) * u64::from(settings.height) * u64::from(settings.spp);
-        let count = |wanted: &dyn Fn(Shadows) -> bool| {
-            lights.iter().filter(|light| wanted(light.shadows)).count() as u64
-        };
-        let (ray_lights, mesh_lights) = match settings.method {
-            Method::Auto => (
-                count(&|s| s == Shadows::Hard),
-                count(&|s| s == Shadows::Soft),
-            ),
-            Method::Whitted | Method::Area => {
-                (count(&|s| matches!(s, Shadows::Hard | Shadows::Soft)), 0)
+        let split = ShadowSplit::new(lights.iter().map(|light| light.shadows).collect());
+        let method = split.resolve(settings.method, &[]);
+        let (mut ray_lights, mut mesh_lights) = (0, 0);
+        for index in 0..lights.len() {
+            match split.role(method, index, &[]) {
+                LightRole::LightMesh => mesh_lights += 1,
+                LightRole::FormulaOne { test_segment: true } => ray_lights += 1,
+                LightRole::Lamp if split.tests_segment(index) => ray_lights += 1,
+                _ => {}
             }
-            Method::Lmm | Method::Lmm1 => (0, count(&|s| s != Shadows::None)),
-        };
+        }
         let ki = f64::from(settings.lightmesh.ki);
         let nodes_per_point = if mesh_lights > 0 {
             (2.0 / 3.0 * std::f64::consts::PI * ki * ki * ki).ceil() as u64

@@ -6,6 +6,12 @@
 //! `none` light is off everywhere and no formula-(1) term of an
 //! unshadowed light tests its segment (it would be clear).
 //!
+//! [`ShadowSplit::resolve`] is the one place that reads `auto`: it turns
+//! the run's [`Method`] and the frame's classes into a [`FrameMethod`],
+//! the integrators the frame runs, and every later question (a light's
+//! role, the lights an integrator is handed) is asked of that. Backends
+//! match on a `FrameMethod`, which has no `auto` to resolve again.
+//!
 //! One frame may so use two integrators. Each light's term is computed by
 //! its own, and a point's terms are summed in a fixed order (the
 //! formula-(1) lights first, in light order, then the light mesh's), so a
@@ -15,8 +21,51 @@ use glam::Vec3;
 
 use super::light::RenderLight;
 use super::omega::LightLanes;
-use crate::plan::Shadows;
+use crate::plan::shadows::Shadows;
 use crate::settings::Method;
+
+/// The integrators a frame runs: the run's [`Method`] with `auto`
+/// resolved against the frame's lights' classes
+/// ([`ShadowSplit::resolve`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameMethod {
+    /// Formula (1) for every light that is on (`whitted`, and `auto`
+    /// where no light is soft).
+    FormulaOne,
+    /// Monte Carlo samples of every lamp that is on (`area`).
+    Lamps,
+    /// Formula (2) from the light mesh for `lights`, with LMM's
+    /// point-to-node tests or without them (LMM1's rule); formula (1)
+    /// shades the other lights that are on, their terms first.
+    LightMesh {
+        point_to_node_tests: bool,
+        lights: MeshLights,
+    },
+}
+
+impl FrameMethod {
+    /// Whether formula (2) keeps only the nodes a point sees (LMM's step
+    /// 3, one point-to-node segment per candidate); LMM1 keeps them all.
+    pub fn tests_point_to_node(self) -> bool {
+        matches!(
+            self,
+            FrameMethod::LightMesh {
+                point_to_node_tests: true,
+                ..
+            }
+        )
+    }
+}
+
+/// The lights a [`FrameMethod::LightMesh`] frame shades from the light
+/// mesh.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshLights {
+    /// Every light that is on (`lmm`, `lmm1`).
+    All,
+    /// The soft ones (`auto`).
+    Soft,
+}
 
 /// How one light is shaded in a frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -57,27 +106,56 @@ impl ShadowSplit {
         self.classes.get(index) != Some(&Shadows::Unshadowed)
     }
 
+    /// The integrators `method` runs in a frame with `lights`: `auto`
+    /// runs the light mesh (by LMM1's rule) where some light is soft, and
+    /// formula (1) alone where none is.
+    pub fn resolve(&self, method: Method, lights: &[RenderLight]) -> FrameMethod {
+        let light_mesh = |point_to_node_tests, lights| FrameMethod::LightMesh {
+            point_to_node_tests,
+            lights,
+        };
+        match method {
+            Method::Whitted => FrameMethod::FormulaOne,
+            Method::Area => FrameMethod::Lamps,
+            Method::Lmm => light_mesh(true, MeshLights::All),
+            Method::Lmm1 => light_mesh(false, MeshLights::All),
+            Method::Auto if self.has_class(Shadows::Soft, lights) => {
+                light_mesh(false, MeshLights::Soft)
+            }
+            Method::Auto => FrameMethod::FormulaOne,
+        }
+    }
+
+    /// Whether some light of `lights` (or of the plan) is in `class`.
+    fn has_class(&self, class: Shadows, lights: &[RenderLight]) -> bool {
+        self.indices(lights)
+            .any(|index| self.class(index, lights) == class)
+    }
+
     /// How `method` shades light `index` of `lights`.
-    pub fn role(&self, method: Method, index: usize, lights: &[RenderLight]) -> LightRole {
+    pub fn role(&self, method: FrameMethod, index: usize, lights: &[RenderLight]) -> LightRole {
         let class = self.class(index, lights);
         let test_segment = class != Shadows::Unshadowed;
         match (class, method) {
             (Shadows::None, _) => LightRole::Off,
-            (_, Method::Lmm | Method::Lmm1) => LightRole::LightMesh,
-            (_, Method::Area) => LightRole::Lamp,
-            (Shadows::Soft, Method::Auto) => LightRole::LightMesh,
-            (_, Method::Auto | Method::Whitted) => LightRole::FormulaOne { test_segment },
+            (_, FrameMethod::FormulaOne) => LightRole::FormulaOne { test_segment },
+            (_, FrameMethod::Lamps) => LightRole::Lamp,
+            (Shadows::Soft, FrameMethod::LightMesh { .. }) => LightRole::LightMesh,
+            (_, FrameMethod::LightMesh { lights, .. }) => match lights {
+                MeshLights::All => LightRole::LightMesh,
+                MeshLights::Soft => LightRole::FormulaOne { test_segment },
+            },
         }
     }
 
     /// Whether `method` shades some light of `lights` from the light mesh.
-    pub fn uses_light_mesh(&self, method: Method, lights: &[RenderLight]) -> bool {
+    pub fn uses_light_mesh(&self, method: FrameMethod, lights: &[RenderLight]) -> bool {
         self.indices(lights)
             .any(|index| self.role(method, index, lights) == LightRole::LightMesh)
     }
 
     /// Whether `method` shades some light of `lights` by formula (1).
-    pub fn uses_formula_one(&self, method: Method, lights: &[RenderLight]) -> bool {
+    pub fn uses_formula_one(&self, method: FrameMethod, lights: &[RenderLight]) -> bool {
         self.indices(lights).any(|index| {
             matches!(
                 self.role(method, index, lights),
@@ -97,7 +175,7 @@ impl ShadowSplit {
     /// these spends nothing on the others, and their lanes add nothing.
     pub fn only(
         &self,
-        method: Method,
+        method: FrameMethod,
         lights: &[RenderLight],
         wanted: impl Fn(LightRole) -> bool,
     ) -> Vec<RenderLight> {
@@ -117,7 +195,7 @@ impl ShadowSplit {
     /// [`ShadowSplit::only`] in SIMD lanes.
     pub fn lanes(
         &self,
-        method: Method,
+        method: FrameMethod,
         lights: &[RenderLight],
         wanted: impl Fn(LightRole) -> bool,
     ) -> LightLanes {

@@ -21,7 +21,7 @@
 
 use crate::lightmesh::kernel::Kernel;
 use crate::lightmesh::penumbra::{self, Penumbra};
-use crate::lightmesh::{lamp_disk, lattice, masks, wide};
+use crate::lightmesh::{lamp_disk, lattice, masks, wide_ball};
 use crate::plan::Shadows;
 
 /// Declares each constant once: as a Rust `pub const` and as a line of
@@ -216,7 +216,7 @@ contract! {
     /// u32 words of a bit per candidate of one half-ball.
     KEPT_WORDS: u32 = (MAX_SPAN as u32).pow(3).div_ceil(32);
     /// Mesh steps per step of the wide set's lattice.
-    WIDE_STEPS: i32 = wide::STEPS;
+    WIDE_STEPS: i32 = wide_ball::STEPS;
     /// The finest lattice level a lamp's penumbra is sized on.
     FINEST_LEVEL: i32 = penumbra::FINEST_LEVEL;
     /// The coarsest.

@@ -27,18 +27,17 @@ use super::surface::{LevelBuffers, SurfacePoint};
 use crate::plan::Shadows;
 use crate::render::light::RenderLight;
 use crate::render::omega::OmegaLight;
-use crate::render::shadow_split::LightRole;
+use crate::render::shadow_split::{FrameMethod, LightRole};
 use crate::render::surface::ShadingPoint;
 use crate::render::FrameJob;
-use crate::settings::Method;
 use crate::stats::ClassRays;
 
 /// Each of `job`'s lights' `shading` bits under `method`: its role in the
 /// frame's [`ShadowSplit`](crate::render::shadow_split::ShadowSplit), so
 /// that one frame's passes can shade some lights by formula (1) and the
-/// others by formula (2), as `auto` asks. A light switched off, or one
+/// others by formula (2), as `auto` resolves where some light is soft. A light switched off, or one
 /// whose lamp the CPU samples (`area`), has no integrator bit.
-pub fn shading_flags(job: &FrameJob, method: Method) -> Vec<u32> {
+pub fn shading_flags(job: &FrameJob, method: FrameMethod) -> Vec<u32> {
     let (shadows, lights) = (job.shadows, &job.frame.lights);
     (0..lights.len())
         .map(|index| {

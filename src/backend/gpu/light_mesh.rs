@@ -37,10 +37,9 @@ use crate::backend::RenderError;
 use crate::lightmesh::interpolate::PointCounts;
 use crate::lightmesh::{LightMesh, LightMeshStats};
 use crate::render::omega::LightLanes;
-use crate::render::shadow_split::LightRole;
+use crate::render::shadow_split::{FrameMethod, LightRole};
 use crate::render::surface::ShadingPoint;
 use crate::render::FrameJob;
-use crate::settings::Method;
 use crate::stats::FrameStats;
 
 /// Formula (2)'s counters, as u32 words: (low, high) pairs of
@@ -111,7 +110,7 @@ impl<'m> LightMeshShading<'m> {
         context: &GpuContext,
         mesh: &'m mut LightMesh,
         pool: &'m mut MaskPool,
-        method: Method,
+        method: FrameMethod,
         job: &FrameJob,
     ) -> Result<LightMeshShading<'m>, RenderError> {
         let lights = &job.frame.lights;

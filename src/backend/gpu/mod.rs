@@ -59,9 +59,10 @@ use super::{thread_pool, BackendError, RenderError};
 use crate::accel::{Ray, World};
 use crate::lightmesh::LightMesh;
 use crate::output::{Image, RenderedFrame};
+use crate::render::shadow_split::FrameMethod;
 use crate::render::surface::ShadingPoint;
 use crate::render::FrameJob;
-use crate::settings::{Aov, LightMeshSettings, Method};
+use crate::settings::{Aov, LightMeshSettings};
 use crate::stats::FrameStats;
 use fill::FillPass;
 use frame::{DirectMethod, Frame};
@@ -129,7 +130,7 @@ impl GpuBackend {
     /// the pipeline cache. The times go to the next frame's stats.
     pub fn prepare_pipelines(
         &self,
-        method: Method,
+        method: FrameMethod,
         aovs: &[Aov],
         progress: impl FnMut(usize, usize),
     ) {
@@ -206,7 +207,11 @@ impl GpuBackend {
     /// world, the frame's placement where it changed, and its lights
     /// (with how `method` shades each, and their layers where the `light`
     /// AOV asks for them).
-    fn upload_frame(&mut self, job: &FrameJob, method: Method) -> Result<FrameLights, GpuError> {
+    fn upload_frame(
+        &mut self,
+        job: &FrameJob,
+        method: FrameMethod,
+    ) -> Result<FrameLights, GpuError> {
         let context = &self.context;
         Self::upload(&mut self.scene, context, job.world)?;
         let world = job.world.id();
@@ -241,15 +246,17 @@ impl GpuBackend {
         }
     }
 
-    /// Renders one frame by `method` (`auto` shading each light as the
-    /// plan's class says: see [`direct_method`]), with the AOV layers
-    /// `job` asks for; stage times, ray and point counts go to `stats`.
-    /// The light-mesh methods shade from `light_mesh` (an error without
-    /// one), whose masks the backend keeps resident.
+    /// Renders one frame by `method`, with the AOV layers `job` asks for;
+    /// stage times, ray and point counts go to `stats`. A light-mesh frame
+    /// shades from `light_mesh` (an error without one), whose masks the
+    /// backend keeps resident; its passes also add the terms of the
+    /// lights it shades by formula (1) first, as the CPU does. Each
+    /// light's `shading` bits ([`direct::shading_flags`]) tell the passes
+    /// which integrator is its.
     pub fn render(
         &mut self,
         job: &FrameJob,
-        method: Method,
+        method: FrameMethod,
         light_mesh: Option<&mut LightMesh>,
         stats: &mut FrameStats,
     ) -> Result<RenderedFrame, RenderError> {
@@ -264,16 +271,13 @@ impl GpuBackend {
             Some(pool) => pool,
             None => MaskPool::new(&self.context, self.mask_memory)?,
         };
-        let mut direct = match (direct_method(job, method), light_mesh) {
-            (Method::Whitted, _) => DirectMethod::Whitted,
-            (Method::Area, _) => DirectMethod::Area,
-            (Method::Lmm | Method::Lmm1, Some(mesh)) => DirectMethod::LightMesh(Box::new(
+        let mut direct = match (method, light_mesh) {
+            (FrameMethod::FormulaOne, _) => DirectMethod::Whitted,
+            (FrameMethod::Lamps, _) => DirectMethod::Area,
+            (FrameMethod::LightMesh { .. }, Some(mesh)) => DirectMethod::LightMesh(Box::new(
                 LightMeshShading::new(&self.context, mesh, &mut pool, method, job)?,
             )),
-            (Method::Lmm | Method::Lmm1 | Method::Auto, None) => {
-                return Err(RenderError::NoLightMesh(method))
-            }
-            (Method::Auto, Some(_)) => unreachable!("direct_method resolves auto"),
+            (FrameMethod::LightMesh { .. }, None) => return Err(RenderError::NoLightMesh),
         };
         let frame = self.frame(job, lights);
         stats.add_stage_time("upload", start.elapsed().as_secs_f64());
@@ -329,7 +333,7 @@ impl GpuBackend {
         job: &FrameJob,
         rays: &[Ray],
     ) -> Result<Vec<Option<ShadingPoint>>, GpuError> {
-        let lights = self.upload_frame(job, Method::Whitted)?;
+        let lights = self.upload_frame(job, FrameMethod::FormulaOne)?;
         self.frame(job, lights).shading_points(rays)
     }
 }
@@ -341,18 +345,4 @@ pub struct GpuPasses<'a> {
     pub direct: &'a DirectLightPass,
     pub fill: &'a FillPass,
     pub scene: &'a GpuScene,
-}
-
-/// The passes that shade a frame by `method`: `auto` runs formula (2)'s
-/// (LMM1's rule) where the plan shades some light from the light mesh,
-/// which also add the terms of the lights it shades by formula (1) (hard
-/// and unshadowed ones) first, as the CPU does; and formula (1)'s alone
-/// where it shades none from the light mesh. Each light's `shading` bits
-/// ([`direct::shading_flags`]) tell the passes which integrator is its.
-fn direct_method(job: &FrameJob, method: Method) -> Method {
-    match method {
-        Method::Auto if job.shadows.uses_light_mesh(method, &job.frame.lights) => Method::Lmm1,
-        Method::Auto => Method::Whitted,
-        forced => forced,
-    }
 }

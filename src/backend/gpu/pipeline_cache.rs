@@ -130,7 +130,10 @@ impl PipelineCache {
             ms: started.elapsed().as_secs_f64() * 1e3,
             cached: self.held.contains(name),
         };
-        let mut log = self.made.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        let mut log = self
+            .made
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
         log.unsaved |= log.names.insert(name);
         log.log.push(made);
         pipeline
@@ -138,7 +141,10 @@ impl PipelineCache {
 
     /// The pipelines made since the last call, in the order they were.
     pub fn take_made(&self) -> Vec<PipelineMade> {
-        let mut made = self.made.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        let mut made = self
+            .made
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
         std::mem::take(&mut made.log)
     }
 
@@ -148,7 +154,10 @@ impl PipelineCache {
         let (Some(driver), Some(file)) = (&self.driver, &self.file) else {
             return Ok(());
         };
-        let mut made = self.made.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        let mut made = self
+            .made
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
         if !made.unsaved {
             return Ok(());
         }
@@ -163,10 +172,12 @@ impl PipelineCache {
         let bytes = stored.to_bytes();
         output::write_atomically(file, |writer| {
             use std::io::Write;
-            writer.write_all(&bytes).map_err(|source| OutputError::Write {
-                path: file.clone(),
-                source,
-            })
+            writer
+                .write_all(&bytes)
+                .map_err(|source| OutputError::Write {
+                    path: file.clone(),
+                    source,
+                })
         })?;
         made.unsaved = false;
         Ok(())
@@ -180,13 +191,19 @@ fn read(file: &Path) -> Option<StoredPipelines> {
         Ok(bytes) => bytes,
         Err(error) if error.kind() == std::io::ErrorKind::NotFound => return None,
         Err(error) => {
-            log::warn!("ignoring the GPU pipeline cache {}: {error}", file.display());
+            log::warn!(
+                "ignoring the GPU pipeline cache {}: {error}",
+                file.display()
+            );
             return None;
         }
     };
     StoredPipelines::from_bytes(&bytes)
         .map_err(|fault| {
-            log::warn!("ignoring the GPU pipeline cache {}: {fault}", file.display())
+            log::warn!(
+                "ignoring the GPU pipeline cache {}: {fault}",
+                file.display()
+            )
         })
         .ok()
 }

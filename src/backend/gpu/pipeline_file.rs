@@ -160,7 +160,10 @@ mod tests {
     fn every_damaged_file_is_refused() {
         let bytes = stored().to_bytes();
         for length in 0..bytes.len() {
-            assert!(StoredPipelines::from_bytes(&bytes[..length]).is_err(), "{length}");
+            assert!(
+                StoredPipelines::from_bytes(&bytes[..length]).is_err(),
+                "{length}"
+            );
         }
         for at in 0..bytes.len() {
             let mut flipped = bytes.clone();
@@ -169,10 +172,7 @@ mod tests {
         }
         let mut longer = bytes.clone();
         longer.push(0);
-        assert_eq!(
-            StoredPipelines::from_bytes(&longer),
-            Err(Fault::Checksum)
-        );
+        assert_eq!(StoredPipelines::from_bytes(&longer), Err(Fault::Checksum));
         assert_eq!(
             StoredPipelines::from_bytes(b"GARBAGE!and more"),
             Err(Fault::Magic)

@@ -19,7 +19,8 @@ use super::pass::WorldPass;
 use super::scatter::ScatterPasses;
 use super::surface::SurfacePass;
 use super::trace::RayQueries;
-use crate::settings::{Aov, Method};
+use crate::render::shadow_split::FrameMethod;
+use crate::settings::Aov;
 
 pub struct Pipelines {
     pub camera: CameraPass,
@@ -49,9 +50,13 @@ impl Pipelines {
         }
     }
 
-    /// The passes frames by `method` record with `aovs` (`auto`: both
-    /// Whitted's and the light mesh's, unless the caller resolved it).
-    pub fn needed(&self, context: &GpuContext, method: Method, aovs: &[Aov]) -> Vec<&WorldPass> {
+    /// The passes frames by `method` record with `aovs`.
+    pub fn needed(
+        &self,
+        context: &GpuContext,
+        method: FrameMethod,
+        aovs: &[Aov],
+    ) -> Vec<&WorldPass> {
         let light_layers = aovs.contains(&Aov::Light);
         let scatter = &self.scatter;
         let mut passes = vec![
@@ -65,28 +70,26 @@ impl Pipelines {
             &self.film.accumulate,
             &self.film.resolve,
         ];
-        let (formula_one, light_mesh) = match method {
-            Method::Whitted => (true, false),
-            Method::Lmm | Method::Lmm1 => (false, true),
-            Method::Auto => (true, true),
-            Method::Area => {
-                passes.push(&self.queries.any);
-                (false, false)
-            }
+        // Formula (2)'s shader also adds the terms of the lights formula
+        // (1) shades; the lamps' samples are the CPU's.
+        let direct = match method {
+            FrameMethod::FormulaOne => Some(&self.direct.pass),
+            FrameMethod::LightMesh { .. } => Some(&self.light_mesh.shade),
+            FrameMethod::Lamps => None,
         };
-        if formula_one {
-            passes.push(self.direct.pass.plain());
+        if let Some(direct) = direct {
+            passes.push(direct.plain());
             if light_layers {
-                passes.push(self.direct.pass.layered(context));
+                passes.push(direct.layered(context));
             }
         }
-        if light_mesh {
-            let mesh = &self.light_mesh;
-            passes.extend([&mesh.coverage, &mesh.gather, &self.fill.pass]);
-            passes.push(mesh.shade.plain());
-            if light_layers {
-                passes.push(mesh.shade.layered(context));
+        match method {
+            FrameMethod::LightMesh { .. } => {
+                let mesh = &self.light_mesh;
+                passes.extend([&mesh.coverage, &mesh.gather, &self.fill.pass]);
             }
+            FrameMethod::Lamps => passes.push(&self.queries.any),
+            FrameMethod::FormulaOne => {}
         }
         if !aovs.is_empty() {
             passes.push(&self.aovs.first_hits);
