@@ -21,7 +21,7 @@ use crate::output::{
 };
 use crate::plan::Plan;
 use crate::render::frame::{CameraChoice, FrameScene, PlaceError, SceneBounds};
-use crate::render::shadow_split::ShadowSplit;
+use crate::render::shadow_split::{FrameMethod, ShadowSplit};
 use crate::render::FrameJob;
 use crate::scene::pose::{dynamic_nodes, Pose};
 use crate::scene::SceneDesc;
@@ -501,20 +501,47 @@ fn shot_sheet(path: &Path, settings: &Settings, frames: &FrameSet) -> Result<Sho
 }
 
 /// The backend and the loaded scene `job` runs on, following its plan,
-/// with its disk cache and clips set.
-fn open(job: &Job) -> Result<(Backend, Sequence), RunError> {
+/// with its disk cache and clips set, and the GPU pipelines its frames
+/// need compiled (reporting (compiled, of) to `on_compile`). Where the
+/// method alone says which pipelines those are (all but `auto`, which the
+/// plan decides), they compile while the scene loads and its world is
+/// built.
+fn open(
+    job: &Job,
+    mut on_compile: impl FnMut(usize, usize),
+) -> Result<(Backend, Sequence), RunError> {
     let settings = job.settings;
     let mut backend = Backend::new(settings.backend, settings.threads)?;
     backend.limit_mask_memory(settings.lightmesh.gpu_memory_mib.saturating_mul(1 << 20));
     if let Some(dir) = &settings.cache_dir {
         backend.keep_pipelines_in(Path::new(dir));
     }
+    let forced = FrameMethod::forced(settings.method);
+    let sequence = std::thread::scope(|scope| {
+        let loading = scope.spawn(|| load_sequence(job));
+        if let Some(method) = forced {
+            backend.prepare_pipelines(method, &settings.aovs, &mut on_compile);
+        }
+        loading
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+    })?;
+    if forced.is_none() {
+        sequence.prepare_pipelines(&backend, settings, on_compile);
+    }
+    Ok((backend, sequence))
+}
+
+/// `job`'s scene loaded, planned and its world built, with its disk cache
+/// set.
+fn load_sequence(job: &Job) -> Result<Sequence, RunError> {
+    let settings = job.settings;
     let (scene, clips, plan) = load_planned(job)?;
     let first_time = Timeline { fps: settings.fps }.time_of(plan.frames.frames()[0]);
     let file = job.scene_path.display().to_string();
     let mut sequence = Sequence::planned(scene, file, clips, first_time, plan)?;
     sequence.set_cache_dir(settings.cache_dir.as_ref().map(PathBuf::from));
-    Ok((backend, sequence))
+    Ok(sequence)
 }
 
 /// The effect plan of `job` (`lmanim plan`, `--explain`).
@@ -575,14 +602,13 @@ pub fn warm(job: &Job) -> Result<WarmStats, RunError> {
     if settings.cache_dir.is_none() {
         return Err(RunError::WarmWithoutCache);
     }
-    let (mut backend, mut sequence) = open(job)?;
+    // A farm's warm step fills the pipeline cache as well as the masks':
+    // its render tasks then start without the driver's compile.
+    let (mut backend, mut sequence) = open(job, |_, _| {})?;
     let method = sequence.shadows.resolve(settings.method, &[]);
     if !sequence.shadows.uses_light_mesh(method, &[]) {
         return Err(RunError::WarmWithoutLightMesh(settings.method));
     }
-    // A farm's warm step fills the pipeline cache as well as the masks':
-    // its render tasks then start without the driver's compile.
-    sequence.prepare_pipelines(&backend, settings, |_, _| {});
     let timeline = Timeline { fps: settings.fps };
     let mut warm = WarmStats::default();
     for &frame in job.frames.frames() {
@@ -632,16 +658,15 @@ pub fn run(job: &Job, mut on_event: impl FnMut(RunEvent)) -> Result<RunStats, Ru
             job.pattern.path_for(0).display().to_string(),
         ));
     }
-    let (mut backend, mut sequence) = open(job)?;
     let compile_started = Instant::now();
-    sequence.prepare_pipelines(&backend, settings, |compiled, of| {
+    let (mut backend, mut sequence) = open(job, |compiled, of| {
         let seconds = compile_started.elapsed().as_secs_f64();
         on_event(RunEvent::Compiling {
             compiled,
             of,
             seconds,
         })
-    });
+    })?;
     let mut run = RunStats {
         threads: backend.threads(),
         method: settings.method.to_string(),

@@ -44,6 +44,23 @@ pub enum FrameMethod {
 }
 
 impl FrameMethod {
+    /// What every frame by `method` runs, whatever its lights' classes;
+    /// None for `auto`, which the plan's classes decide
+    /// ([`ShadowSplit::resolve`]).
+    pub fn forced(method: Method) -> Option<FrameMethod> {
+        let light_mesh = |point_to_node_tests| FrameMethod::LightMesh {
+            point_to_node_tests,
+            lights: MeshLights::All,
+        };
+        match method {
+            Method::Whitted => Some(FrameMethod::FormulaOne),
+            Method::Area => Some(FrameMethod::Lamps),
+            Method::Lmm => Some(light_mesh(true)),
+            Method::Lmm1 => Some(light_mesh(false)),
+            Method::Auto => None,
+        }
+    }
+
     /// Whether formula (2) keeps only the nodes a point sees (LMM's step
     /// 3, one point-to-node segment per candidate); LMM1 keeps them all.
     pub fn tests_point_to_node(self) -> bool {
@@ -110,19 +127,13 @@ impl ShadowSplit {
     /// runs the light mesh (by LMM1's rule) where some light is soft, and
     /// formula (1) alone where none is.
     pub fn resolve(&self, method: Method, lights: &[RenderLight]) -> FrameMethod {
-        let light_mesh = |point_to_node_tests, lights| FrameMethod::LightMesh {
-            point_to_node_tests,
-            lights,
-        };
-        match method {
-            Method::Whitted => FrameMethod::FormulaOne,
-            Method::Area => FrameMethod::Lamps,
-            Method::Lmm => light_mesh(true, MeshLights::All),
-            Method::Lmm1 => light_mesh(false, MeshLights::All),
-            Method::Auto if self.has_class(Shadows::Soft, lights) => {
-                light_mesh(false, MeshLights::Soft)
-            }
-            Method::Auto => FrameMethod::FormulaOne,
+        match FrameMethod::forced(method) {
+            Some(forced) => forced,
+            None if self.has_class(Shadows::Soft, lights) => FrameMethod::LightMesh {
+                point_to_node_tests: false,
+                lights: MeshLights::Soft,
+            },
+            None => FrameMethod::FormulaOne,
         }
     }
 
