@@ -221,17 +221,16 @@ struct BlockerShare {
     rays: u32,
 }
 
-// The first thing on the segment from `start` to the light's `centre`: its
-// distance from `start`, and `start`'s from the centre (`blocker_distance`).
+// The first thing on a sizing ray's segment (from its start along
+// `direction`, as far as `trace_segment` found it: `best`): its distance
+// from the start, and the segment's length (`blocker_distance`).
 struct BlockerHit {
     found: bool,
     z: f32,
     distance: f32,
 }
 
-fn blocker_hit(start: vec3<f32>, centre: vec3<f32>) -> BlockerHit {
-    let direction = centre - start;
-    let best = trace_segment(start, direction, SHADOW_SEGMENT_END, false);
+fn blocker_hit(best: Closest, direction: vec3<f32>) -> BlockerHit {
     if best.mesh == NO_MESH {
         return BlockerHit(false, 0.0, 0.0);
     }
@@ -377,8 +376,9 @@ const GRAZING_COSINE: f32 = 0.3;
 
 // The share of `light` (bit `bit` of the word) over the lamp disk of the
 // lattice level its penumbra wants at the point, sized as `sizing` says;
-// SHARE_FIXED where nothing sizes it. The two sizings trace at most two
-// rays before the level's, from one place (see `trace_segment`):
+// SHARE_FIXED where nothing sizes it. Every ray goes through the one
+// `trace_segment` of the loop (see there why): first the sizing rays, at
+// most two, then the level's node segments. The sizings:
 // - by the blocker: the centre ray, and where it is clear the ray from
 //   the set's nearest blocked node (`find_nearest_blocked`);
 // - by a grazing ray (`penumbra::grazing_estimate`), for a lamp that
@@ -390,6 +390,7 @@ fn lamp_share(point: ShadePoint, origin: vec3<f32>, bit: u32, light: Light, sizi
         return BlockerShare(SHARE_FIXED, 0.0, 0u);
     }
     let grazing = sizing == SIZED_BY_GRAZING_RAY;
+    let wide = sizing == SIZED_BY_WIDE_BLOCKER;
     var first_target = light.origin;
     var second_start = origin;
     if grazing {
@@ -407,84 +408,100 @@ fn lamp_share(point: ShadePoint, origin: vec3<f32>, bit: u32, light: Light, sizi
     }
     var hits: array<BlockerHit, 2>;
     var rays = 0u;
-    for (; rays < 2u; rays++) {
-        let start = select(origin, second_start, rays == 1u);
-        let end = select(light.origin, first_target, rays == 0u);
-        hits[rays] = blocker_hit(start, end);
-        // The blocker's second ray follows a clear centre ray, the
-        // grazing one's follows a blocked probe.
-        if hits[0].found != grazing {
-            rays += 1u;
-            break;
-        }
-    }
-    if grazing && !hits[0].found {
-        return BlockerShare(SHARE_FIXED, 0.0, 1u);
-    }
-    // The centre ray is the first or the second; the blocker that sizes
-    // the level is the other's where the centre is clear.
-    let centre = u32(grazing);
-    let centre_visible = !hits[centre].found;
-    let blocker = hits[select(centre, 1u - centre, centre_visible)];
-    let wide = sizing == SIZED_BY_WIDE_BLOCKER;
-    return level_share(point, light, blocker, centre_visible, rays, wide);
-}
-
-// `LightMesh::share_over_level`: the share of `light` over the lamp disk
-// of the level whose radius comes nearest the one `blocker` sizes, each
-// level node's segment traced, or the centre ray's answer where the
-// penumbra is too narrow for any level; SHARE_FIXED where nothing was
-// found. From the `wide` set only a penumbra wider than the mesh's level
-// is sized: a narrower one gets SHARE_FIXED, the point's own agreed
-// answer. `blocker_rays` is what finding the blocker took.
-fn level_share(point: ShadePoint, light: Light, blocker: BlockerHit, centre_visible: bool, blocker_rays: u32, wide: bool) -> BlockerShare {
-    var rays = blocker_rays;
-    let hard = select(SHARE_HIDDEN, SHARE_FULL, centre_visible);
-    if !blocker.found {
-        return BlockerShare(SHARE_FIXED, 0.0, rays);
-    }
-    let radius = div(mul(light.lamp_radius, blocker.z), max(blocker.distance - blocker.z, MIN_POSITIVE));
-    // `penumbra::level`.
-    let steps = div(radius, directory.header.radius);
-    if !(steps >= mul(SQRT_2, ldexp(1.0, FINEST_LEVEL - 1))) {
-        return BlockerShare(select(hard, SHARE_FIXED, wide), 0.0, rays);
-    }
-    var level = COARSEST_LEVEL;
-    for (var k = FINEST_LEVEL; k < COARSEST_LEVEL; k++) {
-        if steps < mul(SQRT_2, ldexp(1.0, k)) {
-            level = k;
-            break;
-        }
-    }
-    if wide && level <= 0 {
-        return BlockerShare(SHARE_FIXED, 0.0, rays);
-    }
-    let h = mul(directory.header.h, ldexp(1.0, level));
-    let inverse_radius_squared = div(1.0, mul(radius, radius));
+    // The level's disk (`lamp_disk::disk_nodes`), once the sizing rays
+    // have found it, and what its node segments saw.
+    var on_level = false;
+    var hard = SHARE_FIXED;
+    var radius = 0.0;
+    var h = 0.0;
+    var inverse_radius_squared = 0.0;
+    var to_lamp = vec3<f32>(0.0);
+    var axes = DiskAxes(vec3<f32>(0.0), vec3<f32>(0.0));
+    var lamp_height = 0.0;
+    var disk = DISK;
+    var sample = 0u;
+    var weight = 0u;
     var total = 0u;
     var seen = 0u;
-    // `lamp_disk::disk_nodes`.
-    let to_lamp = light.origin - point.position;
-    let distance = root(dot3(to_lamp, to_lamp));
-    let axes = disk_axes(scale3(to_lamp, div(1.0, distance)));
-    let lamp_height = dot3(to_lamp, point.geometric_normal);
-    var disk = DISK;
-    for (var sample = 0u; sample < DISK_SAMPLES; sample++) {
-        let at = disk[sample];
-        let offset = scale3(axes.across, mul(radius, at.x)) + scale3(axes.up, mul(radius, at.y));
-        let node = disk_node(point.position, point.geometric_normal, to_lamp, lamp_height, offset, h);
-        let weight = node_weight_at(dot3(offset, offset), inverse_radius_squared);
-        total += weight;
-        rays += 1u;
-        if !shadowed(node_position_at(node, h), light) {
-            seen += weight;
+    loop {
+        var start = select(origin, second_start, rays == 1u);
+        var end = select(light.origin, first_target, rays == 0u);
+        if on_level {
+            let at = disk[sample];
+            let offset = scale3(axes.across, mul(radius, at.x)) + scale3(axes.up, mul(radius, at.y));
+            let node = disk_node(point.position, point.geometric_normal, to_lamp, lamp_height, offset, h);
+            weight = node_weight_at(dot3(offset, offset), inverse_radius_squared);
+            total += weight;
+            start = node_position_at(node, h);
+            end = light.origin;
         }
+        let direction = end - start;
+        let best = trace_segment(start, direction, SHADOW_SEGMENT_END, on_level);
+        rays += 1u;
+        if on_level {
+            if best.mesh == NO_MESH {
+                seen += weight;
+            }
+            sample += 1u;
+            if sample == DISK_SAMPLES {
+                break;
+            }
+            continue;
+        }
+        hits[rays - 1u] = blocker_hit(best, direction);
+        // The blocker's second ray follows a clear centre ray, the
+        // grazing one's follows a blocked probe.
+        if rays == 1u && hits[0].found == grazing {
+            continue;
+        }
+        if grazing && !hits[0].found {
+            return BlockerShare(SHARE_FIXED, 0.0, 1u);
+        }
+        // The centre ray is the first or the second; the blocker that
+        // sizes the level is the other's where the centre is clear.
+        let centre = u32(grazing);
+        let centre_visible = !hits[centre].found;
+        let blocker = hits[select(centre, 1u - centre, centre_visible)];
+        // `LightMesh::share_over_level`: the level whose radius comes
+        // nearest the one the blocker sizes, or the centre ray's answer
+        // where the penumbra is too narrow for any level; SHARE_FIXED
+        // where nothing was found. From the wide set only a penumbra
+        // wider than the mesh's level is sized: a narrower one gets
+        // SHARE_FIXED, the point's own agreed answer.
+        hard = select(SHARE_HIDDEN, SHARE_FULL, centre_visible);
+        if !blocker.found {
+            return BlockerShare(SHARE_FIXED, 0.0, rays);
+        }
+        radius = div(mul(light.lamp_radius, blocker.z), max(blocker.distance - blocker.z, MIN_POSITIVE));
+        // `penumbra::level`.
+        let steps = div(radius, directory.header.radius);
+        if !(steps >= mul(SQRT_2, ldexp(1.0, FINEST_LEVEL - 1))) {
+            return BlockerShare(select(hard, SHARE_FIXED, wide), 0.0, rays);
+        }
+        var level = COARSEST_LEVEL;
+        for (var k = FINEST_LEVEL; k < COARSEST_LEVEL; k++) {
+            if steps < mul(SQRT_2, ldexp(1.0, k)) {
+                level = k;
+                break;
+            }
+        }
+        if wide && level <= 0 {
+            return BlockerShare(SHARE_FIXED, 0.0, rays);
+        }
+        h = mul(directory.header.h, ldexp(1.0, level));
+        inverse_radius_squared = div(1.0, mul(radius, radius));
+        to_lamp = light.origin - point.position;
+        let distance = root(dot3(to_lamp, to_lamp));
+        axes = disk_axes(scale3(to_lamp, div(1.0, distance)));
+        lamp_height = dot3(to_lamp, point.geometric_normal);
+        on_level = true;
     }
     if total == 0u {
         return BlockerShare(hard, 0.0, rays);
     }
     return BlockerShare(SHARE_PART, div(f32(seen), f32(total)), rays);
 }
+
 
 @compute @workgroup_size(WORKGROUP)
 fn light_mesh(@builtin(global_invocation_id) id: vec3<u32>) {
