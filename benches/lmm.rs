@@ -6,13 +6,20 @@
 //! default h: what the speed-up costs in penumbra accuracy is in the
 //! penumbra bench's table at the same ratios.
 //!
+//! Then frames that reuse masks: the camera flying over the still
+//! 64-lamp city (its "flythrough"), frame 0 cold and frames 1–3 in the
+//! same sequence, Whitted against LMM1 (issue 34's steady-frame figure).
+//!
 //! Then the paper's table of step-3 tests per point, on the city's walls and
 //! corners, for kI = 2.1, 2.5, 3.0.
 //!
 //! `cargo bench --bench lmm` prints Markdown tables (BENCHMARKS.md keeps
 //! them). `LMANIM_BENCH_QUICK=1` runs 480p only; `LMANIM_BENCH_LAMPS=64`
 //! and `LMANIM_BENCH_HEIGHT=1080` run one lamp count and one size (and
-//! skip the kI table), for profiling one case. `LMANIM_BENCH_BACKEND=gpu`
+//! skip the kI table), for profiling one case; `LMANIM_BENCH_HEIGHT=2160`
+//! runs 3840×2160, the large image where the paper puts the method's
+//! advantage (issue 34's cold-frame figure), which the full run leaves
+//! out for its time. `LMANIM_BENCH_BACKEND=gpu`
 //! runs the matrix on the GPU backend (the adapter is printed: a software
 //! one's timings say nothing of a GPU's).
 
@@ -28,14 +35,16 @@ use lmanim_authoring::city::{city_block, CityParams};
 
 fn main() {
     let quick = std::env::var_os("LMANIM_BENCH_QUICK").is_some();
-    let only_height: Option<u32> = std::env::var("LMANIM_BENCH_HEIGHT")
-        .ok()
-        .map(|height| height.parse().expect("LMANIM_BENCH_HEIGHT is 480 or 1080"));
-    let sizes: Vec<(u32, u32)> = [(854, 480), (1920, 1080)]
+    let only_height: Option<u32> = std::env::var("LMANIM_BENCH_HEIGHT").ok().map(|height| {
+        height
+            .parse()
+            .expect("LMANIM_BENCH_HEIGHT is 480, 1080 or 2160")
+    });
+    let sizes: Vec<(u32, u32)> = [(854, 480), (1920, 1080), (3840, 2160)]
         .into_iter()
         .filter(|&(_, height)| match only_height {
             Some(only) => height == only,
-            None => !quick || height == 480,
+            None => height == 480 || (!quick && height == 1080),
         })
         .collect();
     let dir = tempfile::tempdir().expect("temporary directory");
@@ -173,6 +182,47 @@ fn main() {
         }
     }
 
+    if only_lamps.is_none_or(|lamps| lamps == 64) {
+        let path = dir.path().join("city64-flying.glb");
+        city_block(&CityParams {
+            lamps: 64,
+            flythrough: true,
+            ..CityParams::default()
+        })
+        .and_then(|city| city.write_glb(&path))
+        .expect("city scene");
+        println!();
+        println!("Frames that reuse masks: the camera flying over the still 64-lamp city:");
+        println!();
+        println!("| size | method | frame 0 (cold) | frames 1–3 (each) | steady vs Whitted |");
+        println!("|---|---|---|---|---|");
+        for &(width, height) in &sizes {
+            let mut whitted_steady = 0.0;
+            for method in [Method::Whitted, Method::Lmm1] {
+                let settings = Settings {
+                    width,
+                    height,
+                    method,
+                    camera: Some("flythrough".into()),
+                    ..Settings::default()
+                };
+                let seconds = render_flying(&mut backend, &path, &settings, 4);
+                let steady = &seconds[1..];
+                let mean = steady.iter().sum::<f64>() / steady.len() as f64;
+                if method == Method::Whitted {
+                    whitted_steady = mean;
+                }
+                let each: Vec<String> = steady.iter().map(|s| format!("{s:.2}")).collect();
+                println!(
+                    "| {height}p | {method} | {:.2} | {} | {:.2}× |",
+                    seconds[0],
+                    each.join(", "),
+                    whitted_steady / mean
+                );
+            }
+        }
+    }
+
     if only_lamps.is_some() {
         return;
     }
@@ -196,6 +246,26 @@ fn main() {
             mesh.mean_candidates, mesh.mean_p2n_tests, mesh.mean_interp_set
         );
     }
+}
+
+/// The first `frames` frames of the scene at `path` at 24 fps, in one
+/// sequence (the first cold, the others reusing its masks): each one's
+/// seconds.
+fn render_flying(backend: &mut Backend, path: &Path, settings: &Settings, frames: u32) -> Vec<f64> {
+    let mut sequence = Sequence::load(path).expect("city loads");
+    (0..frames)
+        .map(|frame| {
+            let mut stats = FrameStats::default();
+            let start = Instant::now();
+            let placed = sequence
+                .advance(f64::from(frame) / 24.0, settings, &mut stats)
+                .expect("camera");
+            sequence
+                .render(backend, &placed, settings, &mut stats)
+                .expect("frame renders");
+            start.elapsed().as_secs_f64()
+        })
+        .collect()
 }
 
 /// One frame of the scene at `path`, from scratch: its time and statistics.
