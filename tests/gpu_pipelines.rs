@@ -10,10 +10,8 @@ use std::path::{Path, PathBuf};
 
 use common::cli::lmanim;
 use common::*;
-use glam::{DMat4, DVec3, Vec3};
 
 use lmanim::backend::Backend;
-use lmanim::scene::{LightKind, SceneDesc};
 use lmanim::sequence::Sequence;
 use lmanim::settings::{Method, Settings};
 use lmanim::stats::FrameStats;
@@ -141,32 +139,6 @@ fn a_second_run_makes_its_pipelines_from_the_cache_and_a_damaged_one_is_ignored(
     assert!(cache_files(&no_cache.join("cache")).is_empty());
 }
 
-/// A lamp over a floor, seen from above.
-fn lamp_over_a_floor() -> SceneDesc {
-    let mut scene = empty_scene();
-    let grey = add_material(&mut scene, lambert(Vec3::splat(0.6)));
-    add_quads(&mut scene, &[floor_quad(0.0, 4.0)], 2, grey);
-    add_quads(
-        &mut scene,
-        &box_quads(Vec3::new(0.0, 0.5, 0.0), 0.5),
-        1,
-        grey,
-    );
-    add_lamp(&mut scene, 300.0, Vec3::new(1.0, 4.0, 0.5), 0.2);
-    add_light(
-        &mut scene,
-        LightKind::Point,
-        50.0,
-        DMat4::from_translation(DVec3::new(-2.0, 3.0, 1.0)),
-    );
-    add_camera(
-        &mut scene,
-        perspective(0.9),
-        look_at(DVec3::new(0.0, 6.0, 6.0), DVec3::ZERO),
-    );
-    scene
-}
-
 /// The names of the pipelines made for a frame.
 fn made_in(stats: &FrameStats) -> Vec<&'static str> {
     let gpu = stats.gpu.as_ref().expect("the GPU backend reports");
@@ -176,7 +148,7 @@ fn made_in(stats: &FrameStats) -> Vec<&'static str> {
 /// The scene's frame rendered anew (a sequence of its own: no frame is
 /// a copy of the last) on `gpu`, which keeps its pipelines.
 fn render_frame(gpu: &mut Backend, settings: &Settings) -> FrameStats {
-    let mut sequence = Sequence::new(lamp_over_a_floor(), "lamp".into()).unwrap();
+    let mut sequence = Sequence::new(box_under_a_lamp().0, "box".into()).unwrap();
     let mut stats = FrameStats::default();
     let placed = sequence.advance(0.0, settings, &mut stats).unwrap();
     sequence.render(gpu, &placed, settings, &mut stats).unwrap();
@@ -195,7 +167,7 @@ fn a_run_compiles_what_its_frames_need_before_the_first() {
     let mut settings = settings(24, 16);
     settings.method = Method::Lmm1;
     settings.lightmesh.h = Some(0.25);
-    let sequence = Sequence::new(lamp_over_a_floor(), "lamp".into()).unwrap();
+    let sequence = Sequence::new(box_under_a_lamp().0, "box".into()).unwrap();
     let mut reported = Vec::new();
     sequence.prepare_pipelines(&gpu, &settings, |compiled, of| {
         reported.push((compiled, of))

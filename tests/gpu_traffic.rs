@@ -8,9 +8,9 @@
 mod common;
 
 use common::*;
-use glam::{DMat4, DVec3, Vec3};
+use glam::Vec3;
 
-use lmanim::scene::{LightKind, SceneDesc};
+use lmanim::scene::SceneDesc;
 use lmanim::sequence::Sequence;
 use lmanim::settings::{Method, Settings};
 use lmanim::stats::FrameStats;
@@ -22,27 +22,7 @@ const HEIGHT: u32 = 32;
 /// in over `seconds` (it moves, so no frame is a copy, and it
 /// invalidates no mask bit).
 fn box_on_a_floor(seconds: f32) -> SceneDesc {
-    let mut scene = empty_scene();
-    let grey = add_material(&mut scene, lambert(Vec3::splat(0.6)));
-    add_quads(&mut scene, &[floor_quad(0.0, 6.0)], 4, grey);
-    add_quads(
-        &mut scene,
-        &box_quads(Vec3::new(0.0, 0.5, 0.0), 0.5),
-        1,
-        grey,
-    );
-    add_lamp(&mut scene, 300.0, Vec3::new(1.0, 4.0, 0.5), 0.2);
-    add_light(
-        &mut scene,
-        LightKind::Point,
-        100.0,
-        DMat4::from_translation(DVec3::new(-2.0, 3.0, 1.0)),
-    );
-    let camera = add_camera(
-        &mut scene,
-        perspective(0.9),
-        look_at(DVec3::new(0.0, 6.0, 6.0), DVec3::ZERO),
-    );
+    let (mut scene, camera) = box_under_a_lamp();
     let dolly = linear_translation(
         camera,
         Vec3::new(0.0, 6.0, 6.0),

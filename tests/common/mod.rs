@@ -381,3 +381,30 @@ pub fn cube(n: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
     }
     (p, tris)
 }
+
+/// A box on a floor under a lamp (radius 0.2 m) and a point light, seen
+/// from above by a camera at (0, 6, 6): the scene and the camera's node.
+pub fn box_under_a_lamp() -> (SceneDesc, usize) {
+    let mut scene = empty_scene();
+    let grey = add_material(&mut scene, lambert(Vec3::splat(0.6)));
+    add_quads(&mut scene, &[floor_quad(0.0, 6.0)], 4, grey);
+    add_quads(
+        &mut scene,
+        &box_quads(Vec3::new(0.0, 0.5, 0.0), 0.5),
+        1,
+        grey,
+    );
+    add_lamp(&mut scene, 300.0, Vec3::new(1.0, 4.0, 0.5), 0.2);
+    add_light(
+        &mut scene,
+        LightKind::Point,
+        100.0,
+        DMat4::from_translation(DVec3::new(-2.0, 3.0, 1.0)),
+    );
+    let camera = add_camera(
+        &mut scene,
+        perspective(0.9),
+        look_at(DVec3::new(0.0, 6.0, 6.0), DVec3::ZERO),
+    );
+    (scene, camera)
+}

@@ -136,12 +136,13 @@ impl GpuBackend {
     ) {
         let context = &self.context;
         let passes = self.pipelines.needed(context, method, aovs);
-        // A software adapter compiles on its one queue thread, at a
-        // pipeline's first dispatch: more threads would only wait there,
-        // and each pipeline's time would include the others'.
+        // As many threads as the run's workers (`--threads`); a software
+        // adapter compiles on its one queue thread, at a pipeline's first
+        // dispatch: more threads would only wait there, and each
+        // pipeline's time would include the others'.
         let threads = match context.is_software() {
             true => 1,
-            false => std::thread::available_parallelism().map_or(1, |n| n.get()),
+            false => self.threads(),
         };
         Pipelines::prepare(context, &passes, threads, progress);
         self.save_pipelines();

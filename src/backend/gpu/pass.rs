@@ -12,7 +12,7 @@ use bytemuck::Pod;
 
 use super::context::{GpuContext, GpuError};
 use super::contract::{ANSWERS, ITEMS, PARAMS, WORKGROUP};
-use super::scene::{GpuScene, Params};
+use super::scene::GpuScene;
 use super::shaders::{self, Arithmetic, Entry};
 use super::spirv;
 
@@ -20,9 +20,9 @@ use super::spirv;
 /// one dimension, and a few tens of MiB of items.
 pub const BATCH: usize = 1 << 20;
 
-/// The size of each array an empty dispatch binds: more than any one
-/// record a shader reads from an array, as the layout test in
-/// `shaders.rs` sizes them.
+/// The size of each array an empty dispatch binds: more than the
+/// parameters and any one record a shader reads from an array, as the
+/// layout test in `shaders.rs` sizes them.
 const EMPTY_BINDING_BYTES: u64 = 4096;
 
 /// The pass's shader: our own SPIR-V where the context takes it (every
@@ -228,48 +228,37 @@ impl WorldPass {
     }
 
     /// Dispatches `pipeline` once with zero items (every entry point
-    /// returns at once), every binding bound to a zeroed buffer, and
-    /// waits. A refusal only means the driver compiles later: it is
-    /// logged, not returned.
+    /// returns at once: the parameters' item count is zero), every
+    /// binding bound to a zeroed buffer (one shared by the read-only
+    /// ones), and waits. A refusal only means the driver compiles later:
+    /// it is logged, not returned.
     fn run_empty(&self, context: &GpuContext, pipeline: &wgpu::ComputePipeline) {
         let device = &context.device;
-        let zeroed = |bytes: u64, usage| {
+        let zeroed = || {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("empty dispatch"),
-                size: bytes,
-                usage,
+                size: EMPTY_BINDING_BYTES,
+                usage: wgpu::BufferUsages::STORAGE,
                 mapped_at_creation: false,
             })
         };
-        let params = zeroed(size_of::<Params>() as u64, wgpu::BufferUsages::STORAGE);
-        let storage = wgpu::BufferUsages::STORAGE;
-        let read_only = zeroed(EMPTY_BINDING_BYTES, storage);
-        let buffers: Vec<(u32, wgpu::Buffer)> = (self.bindings.iter())
-            .filter(|binding| binding.binding != PARAMS)
-            .filter(|binding| {
-                !matches!(
-                    binding.ty,
-                    wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: true },
-                        ..
-                    }
-                )
-            })
-            .map(|binding| (binding.binding, zeroed(EMPTY_BINDING_BYTES, storage)))
-            .collect();
-        let resource = |binding: u32| {
-            let buffer = match binding {
-                PARAMS => &params,
-                _ => (buffers.iter())
-                    .find(|(writable, _)| *writable == binding)
-                    .map_or(&read_only, |(_, buffer)| buffer),
-            };
-            buffer.as_entire_binding()
+        let shared = zeroed();
+        let writable = |ty: &wgpu::BindingType| {
+            matches!(
+                ty,
+                wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: false },
+                    ..
+                }
+            )
         };
-        let entries: Vec<wgpu::BindGroupEntry> = (self.bindings.iter())
-            .map(|binding| wgpu::BindGroupEntry {
+        let own: Vec<Option<wgpu::Buffer>> = (self.bindings.iter())
+            .map(|binding| writable(&binding.ty).then(zeroed))
+            .collect();
+        let entries: Vec<wgpu::BindGroupEntry> = (self.bindings.iter().zip(&own))
+            .map(|(binding, own)| wgpu::BindGroupEntry {
                 binding: binding.binding,
-                resource: resource(binding.binding),
+                resource: own.as_ref().unwrap_or(&shared).as_entire_binding(),
             })
             .collect();
         let ran = context.checked("an empty dispatch", || {
