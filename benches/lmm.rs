@@ -120,11 +120,7 @@ fn main() {
                     stats.rays.shadow
                 );
                 if lamps == 64 {
-                    let stages: Vec<String> = stats
-                        .stages
-                        .iter()
-                        .map(|(stage, seconds)| format!("{stage} {seconds:.2}"))
-                        .collect();
+                    let stages = stage_seconds(&stats);
                     let fill = match stats.lightmesh {
                         Some(mesh) => format!(
                             "{} shafts, {} segments ({} remembered), {} hidden groups; \
@@ -140,10 +136,7 @@ fn main() {
                         ),
                         None => "—".to_string(),
                     };
-                    stage_rows.push(format!(
-                        "| {height}p | {label} | {} | {fill} |",
-                        stages.join(", ")
-                    ));
+                    stage_rows.push(format!("| {height}p | {label} | {stages} | {fill} |"));
                 }
             }
         }
@@ -194,8 +187,8 @@ fn main() {
         println!();
         println!("Frames that reuse masks: the camera flying over the still 64-lamp city:");
         println!();
-        println!("| size | method | frame 0 (cold) | frames 1–3 (each) | steady vs Whitted |");
-        println!("|---|---|---|---|---|");
+        println!("| size | method | frame 0 (cold) | frames 1–3 (each) | steady vs Whitted | frame 3's stages |");
+        println!("|---|---|---|---|---|---|");
         for &(width, height) in &sizes {
             let mut whitted_steady = 0.0;
             for method in [Method::Whitted, Method::Lmm1] {
@@ -206,7 +199,7 @@ fn main() {
                     camera: Some("flythrough".into()),
                     ..Settings::default()
                 };
-                let seconds = render_flying(&mut backend, &path, &settings, 4);
+                let (seconds, last) = render_flying(&mut backend, &path, &settings, 4);
                 let steady = &seconds[1..];
                 let mean = steady.iter().sum::<f64>() / steady.len() as f64;
                 if method == Method::Whitted {
@@ -214,10 +207,11 @@ fn main() {
                 }
                 let each: Vec<String> = steady.iter().map(|s| format!("{s:.2}")).collect();
                 println!(
-                    "| {height}p | {method} | {:.2} | {} | {:.2}× |",
+                    "| {height}p | {method} | {:.2} | {} | {:.2}× | {} |",
                     seconds[0],
                     each.join(", "),
-                    whitted_steady / mean
+                    whitted_steady / mean,
+                    stage_seconds(&last)
                 );
             }
         }
@@ -250,12 +244,18 @@ fn main() {
 
 /// The first `frames` frames of the scene at `path` at 24 fps, in one
 /// sequence (the first cold, the others reusing its masks): each one's
-/// seconds.
-fn render_flying(backend: &mut Backend, path: &Path, settings: &Settings, frames: u32) -> Vec<f64> {
+/// seconds, and the last one's statistics.
+fn render_flying(
+    backend: &mut Backend,
+    path: &Path,
+    settings: &Settings,
+    frames: u32,
+) -> (Vec<f64>, FrameStats) {
     let mut sequence = Sequence::load(path).expect("city loads");
-    (0..frames)
+    let mut stats = FrameStats::default();
+    let seconds = (0..frames)
         .map(|frame| {
-            let mut stats = FrameStats::default();
+            stats = FrameStats::default();
             let start = Instant::now();
             let placed = sequence
                 .advance(f64::from(frame) / 24.0, settings, &mut stats)
@@ -265,7 +265,16 @@ fn render_flying(backend: &mut Backend, path: &Path, settings: &Settings, frames
                 .expect("frame renders");
             start.elapsed().as_secs_f64()
         })
-        .collect()
+        .collect();
+    (seconds, stats)
+}
+
+/// A frame's stages with their seconds, "demand 0.36, fill 0.98, ...".
+fn stage_seconds(stats: &FrameStats) -> String {
+    let stages: Vec<String> = (stats.stages.iter())
+        .map(|(stage, seconds)| format!("{stage} {seconds:.2}"))
+        .collect();
+    stages.join(", ")
 }
 
 /// One frame of the scene at `path`, from scratch: its time and statistics.

@@ -249,6 +249,11 @@ struct RenderArgs {
     /// sees the penumbra).
     #[arg(long, value_enum)]
     penumbra: Option<Penumbra>,
+    /// The share of a point's lamp light whose penumbrae may keep the
+    /// half-ball's answer instead of being sized by rays: a pixel moves by
+    /// at most that share of its unshadowed light; 0 sizes every lamp's.
+    #[arg(long, value_name = "SHARE")]
+    faint_lamps: Option<f32>,
     /// Also write a tone-mapped sRGB PNG preview beside each frame.
     #[arg(long)]
     png: bool,
@@ -413,6 +418,7 @@ fn setting_defaults() -> Vec<(&'static str, String)> {
         ("ki", settings.lightmesh.ki.to_string()),
         ("kernel", name(settings.lightmesh.kernel)),
         ("penumbra", name(settings.lightmesh.penumbra)),
+        ("faint_lamps", settings.lightmesh.faint_lamps.to_string()),
         ("exposure", settings.exposure.to_string()),
         ("sheet_columns", settings.sheet_columns.to_string()),
         ("sheet_every", settings.sheet_every.to_string()),
@@ -645,6 +651,12 @@ fn resolve_settings(cli: &RenderArgs) -> Result<Settings, Failure> {
     }
     if let Some(penumbra) = flags.penumbra {
         settings.lightmesh.penumbra = penumbra;
+    }
+    if let Some(share) = flags.faint_lamps {
+        let fault = LightMeshSettings::faint_lamps_fault(share);
+        let fault = fault.map(|fault| anyhow::anyhow!("--faint-lamps {share}: {fault}"));
+        fault.map_or(Ok(()), |fault| Err(Failure::bad_input(fault)))?;
+        settings.lightmesh.faint_lamps = share;
     }
     if flags.no_cache {
         settings.cache_dir = None;
@@ -909,7 +921,7 @@ mod tests {
     /// `Settings::default()` serialised: found apart from
     /// [`setting_defaults`], so a flag documented from the wrong field
     /// shows.
-    const SETTING_OF_FLAG: [(&str, &str); 13] = [
+    const SETTING_OF_FLAG: [(&str, &str); 14] = [
         ("--fps", "/fps"),
         ("--method", "/method"),
         ("--backend", "/backend"),
@@ -919,6 +931,7 @@ mod tests {
         ("--ki", "/lightmesh/ki"),
         ("--kernel", "/lightmesh/kernel"),
         ("--penumbra", "/lightmesh/penumbra"),
+        ("--faint-lamps", "/lightmesh/faint_lamps"),
         ("--exposure", "/exposure"),
         ("--sheet-columns", "/sheet_columns"),
         ("--sheet-every", "/sheet_every"),

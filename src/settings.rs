@@ -11,6 +11,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::camera_path::CameraPath;
+use crate::lightmesh::faint::MAX_FAINT_SHARE;
 use crate::lightmesh::kernel::Kernel;
 use crate::lightmesh::lattice::MAX_KI;
 use crate::lightmesh::penumbra::Penumbra;
@@ -285,6 +286,11 @@ pub struct LightMeshSettings {
     /// penumbra a lamp of that size casts from the blocker's distance
     /// (`lightmesh::penumbra`).
     pub penumbra: Penumbra,
+    /// The share ε of a point's lamp light whose penumbrae it may leave
+    /// at the half-ball's answer instead of sizing them by rays: a pixel
+    /// moves by at most ε of its unshadowed light (`lightmesh::faint`);
+    /// 0 sizes every lamp's, at most 0.5.
+    pub faint_lamps: f32,
     /// h·kI/R of the lattice derived from the lamps when `h` is None: 1
     /// makes the light mesh's transition the penumbra of an occluder
     /// halfway to the lamp; more makes the lattice coarser and faster.
@@ -305,6 +311,7 @@ impl Default for LightMeshSettings {
             ki: 2.5,
             kernel: Kernel::default(),
             penumbra: Penumbra::default(),
+            faint_lamps: 1.0 / 16.0,
             coarseness: 1.0,
             max_memory_mib: 4096,
             gpu_memory_mib: 1024,
@@ -317,6 +324,12 @@ impl LightMeshSettings {
     /// settings file's check and the `--h` flag's.
     pub fn h_fault(h: f32) -> Option<String> {
         (!h.is_finite() || h <= 0.0).then(|| "it must be a positive number of metres".into())
+    }
+
+    /// Why `share` cannot be `faint_lamps`, if it cannot.
+    pub fn faint_lamps_fault(share: f32) -> Option<String> {
+        (!(0.0..=MAX_FAINT_SHARE).contains(&share))
+            .then(|| format!("it must be a share from 0 to {MAX_FAINT_SHARE}"))
     }
 
     /// Why `ki` cannot be an interpolation radius, if it cannot.
@@ -492,6 +505,12 @@ impl Settings {
         }
         if let Some(fault) = LightMeshSettings::ki_fault(lightmesh.ki) {
             return Err(format!("lightmesh.ki is {}; {fault}", lightmesh.ki));
+        }
+        if let Some(fault) = LightMeshSettings::faint_lamps_fault(lightmesh.faint_lamps) {
+            return Err(format!(
+                "lightmesh.faint_lamps is {}; {fault}",
+                lightmesh.faint_lamps
+            ));
         }
         if !(lightmesh.coarseness > 0.0 && lightmesh.coarseness <= MAX_COARSENESS) {
             return Err(format!(

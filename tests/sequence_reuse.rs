@@ -291,11 +291,14 @@ fn channel_sums(image: &Image) -> [f64; 3] {
 }
 
 /// Frames after the first of a sequence that changes no geometry and no
-/// light position: rendered anew (not copied), each different from the
-/// one before, equal to the same frame rendered cold, and not one mask bit
-/// invalidated or computed again.
-fn assert_re_rendered_with_every_bit_kept(scene: &SceneDesc, frames: &[(Image, FrameStats)]) {
-    let settings = settings_for(Method::Lmm);
+/// light position, rendered with `settings`: rendered anew (not copied),
+/// each different from the one before, equal to the same frame rendered
+/// cold, and not one mask bit invalidated or computed again.
+fn assert_re_rendered_with_every_bit_kept(
+    scene: &SceneDesc,
+    settings: &Settings,
+    frames: &[(Image, FrameStats)],
+) {
     assert!(frames[0].1.lightmesh.unwrap().bits_computed > 0);
     for (index, (image, stats)) in frames.iter().enumerate().skip(1) {
         let time = TIMES[index];
@@ -311,7 +314,7 @@ fn assert_re_rendered_with_every_bit_kept(scene: &SceneDesc, frames: &[(Image, F
         );
         assert_eq!(
             *image,
-            rendered_cold(scene, &settings, time, &mut cpu()),
+            rendered_cold(scene, settings, time, &mut cpu()),
             "t = {time}"
         );
     }
@@ -333,11 +336,26 @@ fn light_colour_animation_re_renders_but_invalidates_and_recomputes_nothing() {
             &[200.0, 150.0, 250.0, 300.0],
         ),
     ]);
-    let frames = rendered_in_sequence(&scene, &settings_for(Method::Lmm), &mut cpu());
+    // A lamp's light decides which lamps are faint at a point
+    // (`lightmesh::faint`), and a faint lamp's wide set is not demanded:
+    // with none faint, nothing is computed again.
+    let mut every_lamp = settings_for(Method::Lmm);
+    every_lamp.lightmesh.faint_lamps = 0.0;
+    let frames = rendered_in_sequence(&scene, &every_lamp, &mut cpu());
     for (_, stats) in &frames[1..] {
         assert!(!stats.camera_moved);
     }
-    assert_re_rendered_with_every_bit_kept(&scene, &frames);
+    assert_re_rendered_with_every_bit_kept(&scene, &every_lamp, &frames);
+    // With faint lamps (the default), a lamp that stops being faint asks
+    // for its wide set's bits: some are new, none is invalidated, and the
+    // frames are still the cold ones.
+    let settings = settings_for(Method::Lmm);
+    let defaults = rendered_in_sequence(&scene, &settings, &mut cpu());
+    for (index, (image, stats)) in defaults.iter().enumerate().skip(1) {
+        assert_eq!(stats.bits_invalidated, 0);
+        let cold = rendered_cold(&scene, &settings, TIMES[index], &mut cpu());
+        assert_eq!(*image, cold, "t = {}", TIMES[index]);
+    }
     // White light on grey gives grey; by the end the lamp is orange-red.
     let [r0, g0, b0] = channel_sums(&frames[0].0);
     assert!((r0 - g0).abs() < 1e-3 * r0 && (g0 - b0).abs() < 1e-3 * g0);
@@ -360,7 +378,7 @@ fn material_animation_re_renders_but_invalidates_nothing_and_moves_nothing() {
     for (_, stats) in &frames[1..] {
         assert!(!stats.camera_moved);
     }
-    assert_re_rendered_with_every_bit_kept(&scene, &frames);
+    assert_re_rendered_with_every_bit_kept(&scene, &settings_for(Method::Lmm), &frames);
 }
 
 #[test]

@@ -8,6 +8,7 @@ use glam::IVec3;
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
+use super::faint::{self, FaintScratch};
 use super::masks::{parity, split, BRICK_NODES};
 use super::wide_ball::{self, WideBall};
 use super::{LightMesh, LightMeshError};
@@ -107,7 +108,8 @@ impl BrickTables {
 impl LightMesh {
     /// What `points` need: reaching lights per point and needed bits per
     /// node, in bricks: each point's half-ball for its lights and, with
-    /// `penumbra: wide`, its wide set for its lamps (`super::wide`). The
+    /// `penumbra: wide`, its wide set for its lamps but the faint ones
+    /// (`super::wide`, `super::faint`). The
     /// tables grow with the number of distinct bricks the points touch, so
     /// their size is checked against the memory limit as they grow: a
     /// lattice far too fine for the view is refused here, before it can
@@ -137,6 +139,8 @@ impl LightMesh {
                 |mut tables, (chunk, chunk_reach)| {
                     let mut nodes = Vec::new();
                     let mut lamps_reached = vec![0; words];
+                    let mut faint_lamps = vec![0; words];
+                    let mut faint_scratch = FaintScratch::default();
                     for (point, point_reach) in chunk.iter().zip(chunk_reach.chunks(words)) {
                         if point_reach.iter().all(|&word| word == 0) {
                             continue;
@@ -158,6 +162,20 @@ impl LightMesh {
                             lamps_reached.iter_mut().zip(point_reach.iter().zip(lamps))
                         {
                             *reached = reach & lamp;
+                        }
+                        let at = PointLanes::new(point);
+                        let parts = self.faint_budget();
+                        let faint = &mut faint_lamps;
+                        faint::mark(
+                            lights,
+                            &at,
+                            &lamps_reached,
+                            parts,
+                            &mut faint_scratch,
+                            faint,
+                        );
+                        for (reached, &faint) in lamps_reached.iter_mut().zip(&faint_lamps) {
+                            *reached &= !faint;
                         }
                         if lamps_reached.iter().all(|&word| word == 0) {
                             continue;

@@ -13,12 +13,14 @@ use glam::{IVec3, Vec3};
 
 use super::agreement::Agreement;
 use super::enclosure::leave_out_enclosed;
+use super::faint::{self, FaintScratch};
 use super::kernel::{Kernel, Weights};
 use super::lamp_disk;
 use super::masks::BrickCache;
 use super::penumbra::{self, LevelScratch};
 use super::sight::Sight;
 use super::wide::WideScratch;
+use super::wide_ball::lamps;
 use super::{LightMesh, LightMeshStats};
 use crate::accel::offset::offset_ray_origin;
 use crate::accel::{Ray, World};
@@ -85,6 +87,12 @@ pub struct Scratch<'a> {
     agreement: Agreement,
     /// The points' wide sets (`penumbra: wide`).
     wide: WideScratch,
+    /// The frame's lamps, the point's among them, and those it leaves at
+    /// the half-ball's answer (`super::faint`), a bit per light.
+    lamps: Vec<u64>,
+    reaching_lamps: Vec<u64>,
+    faint: Vec<u64>,
+    faint_scratch: FaintScratch,
     bricks: BrickCache<'a>,
 }
 
@@ -96,6 +104,10 @@ impl<'a> Scratch<'a> {
             levels: LevelScratch::default(),
             agreement: Agreement::new(mesh.lattice, mesh.radius(), 1, mesh.masks().words()),
             wide: WideScratch::new(mesh, lights),
+            lamps: lamps(lights, mesh.masks().words()),
+            reaching_lamps: vec![0; mesh.masks().words()],
+            faint: vec![0; mesh.masks().words()],
+            faint_scratch: FaintScratch::default(),
             bricks: BrickCache::new(mesh.masks()),
         }
     }
@@ -160,6 +172,10 @@ impl LightMesh {
             levels,
             agreement,
             wide,
+            lamps,
+            reaching_lamps,
+            faint,
+            faint_scratch,
             bricks,
         } = scratch;
         let sight = &mut set.sight;
@@ -198,12 +214,20 @@ impl LightMesh {
             sight,
         } = set;
         let (all, any) = (&sight.all, &sight.any);
+        let at = PointLanes::new(point);
+        // The lamps whose penumbrae are not worth their rays here.
+        for (reaching, (&reach, &lamps)) in reaching_lamps.iter_mut().zip(reach.iter().zip(&*lamps))
+        {
+            *reaching = reach & lamps;
+        }
+        let parts = self.faint_budget();
+        faint::mark(lights, &at, reaching_lamps, parts, faint_scratch, faint);
         // The lamps the point's own set agrees on but its wide set does
         // not: it lies in their penumbra, beyond the set's reach.
         wide.look(
             (point.position, point.geometric_normal),
             reach,
-            (all, any),
+            (all, any, faint),
             bricks,
         );
         let wide = &*wide;
@@ -211,7 +235,6 @@ impl LightMesh {
         // Omega eight lights at a time, for the blocks where some node sees
         // a light or the wide set disagrees on it; the sum runs in light
         // order.
-        let at = PointLanes::new(point);
         // Where the blocker's rays start, the same for every light.
         let origin = offset_ray_origin(point.position, point.geometric_normal);
         for (word, &lit) in any.iter().enumerate() {
@@ -228,6 +251,7 @@ impl LightMesh {
                     let light = word * 64 + bit;
                     let seen_by_all = all[word] >> bit & 1 == 1;
                     let in_wide_set = wide.mixed(word) >> bit & 1 == 1;
+                    let refined = faint[word] >> bit & 1 == 0;
                     let penumbra_at = PenumbraAt {
                         point,
                         origin,
@@ -247,7 +271,7 @@ impl LightMesh {
                         self.blocker_share(penumbra_at, set, levels, bricks, &mut counts)
                             .unwrap_or(agreed)
                     } else if seen_by_all {
-                        match self.penumbra.probes_grazing_lamps() {
+                        match self.penumbra.probes_grazing_lamps() && refined {
                             true => self
                                 .grazing_share(penumbra_at, levels, bricks, &mut counts)
                                 .unwrap_or(Share::Full),
@@ -264,7 +288,7 @@ impl LightMesh {
                                 .sum();
                             Share::Part(seen as f32 / total as f32)
                         };
-                        let by_blocker = match self.penumbra.sizes_by_blocker() {
+                        let by_blocker = match self.penumbra.sizes_by_blocker() && refined {
                             true => {
                                 let set = nodes.iter().copied().zip(sees());
                                 self.blocker_share(penumbra_at, set, levels, bricks, &mut counts)

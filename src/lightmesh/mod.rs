@@ -14,6 +14,7 @@ mod agreement;
 pub mod cache;
 pub mod demand;
 pub mod enclosure;
+pub mod faint;
 pub mod fill;
 pub mod interpolate;
 pub mod invalidate;
@@ -47,6 +48,10 @@ pub struct LightMesh {
     pub kernel: Kernel,
     /// How formula (2) sizes each light's set.
     pub penumbra: Penumbra,
+    /// The share of a point's lamp light whose penumbrae it may leave at
+    /// the half-ball's answer, as [`faint::budget_parts`] has it
+    /// (`lightmesh.faint_lamps`).
+    pub faint_parts: u32,
     masks: MaskStore,
     /// Bytes the masks may take before a frame is refused.
     memory_limit: usize,
@@ -156,8 +161,18 @@ impl LightMesh {
             ki,
             kernel: Kernel::Box,
             penumbra: Penumbra::Fixed,
+            faint_parts: 0,
             masks: MaskStore::new(lights),
             memory_limit,
+        }
+    }
+
+    /// The faint lamps' budget ([`faint::budget_parts`]) where penumbrae
+    /// are sized by rays, 0 where they are not (nothing to skip).
+    pub fn faint_budget(&self) -> u32 {
+        match self.penumbra.sizes_by_blocker() {
+            true => self.faint_parts,
+            false => 0,
         }
     }
 

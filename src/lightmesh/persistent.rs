@@ -110,6 +110,7 @@ impl PersistentLightMesh {
         let mut mesh = LightMesh::new(lattice, ki, lights.len(), limit);
         mesh.kernel = settings.kernel;
         mesh.penumbra = settings.penumbra;
+        mesh.faint_parts = super::faint::budget_parts(settings.faint_lamps);
         if let Some(dir) = &self.cache_dir {
             self.bits_loaded = mesh.load_static_masks(dir, self.static_geometry, lights);
             self.cache_start = lights.iter().map(LightKey::of).collect();

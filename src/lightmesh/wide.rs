@@ -84,17 +84,20 @@ impl WideScratch {
 
     /// Finds the lamps of `reach` that the point's wide set disagrees on
     /// while its own set agrees on them (every node sees the lamp: a bit
-    /// of `all`; none does: not a bit of `any`), for [`Self::mixed`].
+    /// of `all`; none does: not a bit of `any`), for [`Self::mixed`]. The
+    /// set was demanded for the point's lamps but the `faint` ones
+    /// (`super::faint`), so only those are read: a faint lamp keeps the
+    /// point's own set's answer.
     pub fn look(
         &mut self,
         (p, n): (Vec3, Vec3),
         reach: &[u64],
-        (all, any): (&[u64], &[u64]),
+        (all, any, faint): (&[u64], &[u64], &[u64]),
         bricks: &mut BrickCache,
     ) {
         self.mixed.fill(0);
         for word in 0..reach.len() {
-            self.demanded[word] = reach[word] & self.lamps[word];
+            self.demanded[word] = reach[word] & self.lamps[word] & !faint[word];
             self.asked[word] = self.demanded[word] & (all[word] | !any[word]);
         }
         if self.asked.iter().all(|&word| word == 0)
@@ -161,7 +164,7 @@ mod tests {
         let up = Vec3::Y;
         let mixed_at = |wide: &mut WideScratch, bricks: &mut BrickCache, x: f32, (all, any)| {
             let p = mesh.origin + Vec3::new(x, 0.3, 0.2) * H;
-            wide.look((p, up), &reach, (&[all], &[any]), bricks);
+            wide.look((p, up), &reach, (&[all], &[any], &[0]), bricks);
             wide.mixed(0)
         };
         // 3.5 steps before the edge, the mesh's half-ball (2.5 steps) sees

@@ -21,7 +21,7 @@
 
 use crate::lightmesh::kernel::Kernel;
 use crate::lightmesh::penumbra::{self, Penumbra};
-use crate::lightmesh::{lamp_disk, lattice, masks, wide_ball};
+use crate::lightmesh::{faint, lamp_disk, lattice, masks, wide_ball};
 use crate::plan::Shadows;
 
 /// Declares each constant once: as a Rust `pub const` and as a line of
@@ -221,6 +221,11 @@ contract! {
     FINEST_LEVEL: i32 = penumbra::FINEST_LEVEL;
     /// The coarsest.
     COARSEST_LEVEL: i32 = penumbra::COARSEST_LEVEL;
+    /// The faint lamps' rule (`faint.wgsl`): its last bucket, the bucket
+    /// that marks none faint, and ε's fixed-point bits.
+    FAINT_LAST_BUCKET: u32 = faint::LAST_BUCKET;
+    FAINT_NONE: u32 = faint::NO_FAINT_BUCKET;
+    FAINT_BUDGET_BITS: u32 = faint::BUDGET_BITS;
     /// Samples of the lamp's disk (`lamp_disk::DISK`).
     DISK_SAMPLES: u32 = lamp_disk::DISK.len() as u32;
 }

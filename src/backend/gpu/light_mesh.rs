@@ -147,7 +147,9 @@ impl<'m> LightMeshShading<'m> {
         let p2n = self.point_to_node_tests;
         self.work.bricks_uploaded += self.pool.refresh(context, self.mesh, p2n)?;
         let light_words = MaskPool::light_words(self.mesh.masks().lights());
-        let reach = answer_buffer::<u32>(context, "reaching lights", level.count * light_words)?;
+        // Per point, its reaching lights, then its lamps that are not faint.
+        let reach_words = level.count * 2 * light_words;
+        let reach = answer_buffer::<u32>(context, "reaching lights", reach_words)?;
         let point_words = level.count.div_ceil(32);
         let flag_words = point_words + self.pool.capacity().div_ceil(32);
         let flags = answer_buffer::<u32>(context, "coverage flags", flag_words)?;

@@ -60,8 +60,8 @@ pub struct MeshHeader {
     /// How lamps' sets are sized (`lightmesh.penumbra`): its code
     /// (`contract::PENUMBRA_FIXED`, `PENUMBRA_BLOCKER`, `PENUMBRA_WIDE`).
     pub penumbra: u32,
-    /// WGSL rounds the struct up to its vec3's alignment of 16 bytes.
-    pub padding: u32,
+    /// The faint lamps' budget (`LightMesh::faint_budget`), 0 for none.
+    pub faint_parts: u32,
 }
 
 /// A directory entry: a brick's coordinates and its slot, or
@@ -350,7 +350,7 @@ impl MaskPool {
             // The contract's codes are the enums' discriminants.
             kernel: weights.kernel() as u32,
             penumbra: mesh.penumbra as u32,
-            padding: 0,
+            faint_parts: mesh.faint_budget(),
         };
         if !self.directory_stale && self.directory.as_ref().is_some_and(|(h, _)| *h == header) {
             return Ok(());

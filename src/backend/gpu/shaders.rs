@@ -117,6 +117,9 @@ const LIGHT_LAYERS: &str = include_str!("shaders/light_layers.wgsl");
 const OMEGA: &str = include_str!("shaders/omega.wgsl");
 const FORMULA_ONE: &str = include_str!("shaders/formula_one.wgsl");
 const LIGHT_MESH_NODES: &str = include_str!("shaders/light_mesh_nodes.wgsl");
+/// Which of a point's lamps are faint: their penumbrae keep the
+/// half-ball's answer.
+const FAINT: &str = include_str!("shaders/faint.wgsl");
 const DIRECT_LIGHT: [&str; 6] = [
     VECTOR,
     SURFACE_POINT,
@@ -125,12 +128,13 @@ const DIRECT_LIGHT: [&str; 6] = [
     FORMULA_ONE,
     include_str!("shaders/direct_light.wgsl"),
 ];
-const LIGHT_MESH_COVERAGE: [&str; 6] = [
+const LIGHT_MESH_COVERAGE: [&str; 7] = [
     VECTOR,
     SURFACE_POINT,
     SCHLICK,
     OMEGA,
     LIGHT_MESH_NODES,
+    FAINT,
     include_str!("shaders/light_mesh_coverage.wgsl"),
 ];
 /// The fill's segments, traced as formula (1)'s are.
@@ -407,7 +411,7 @@ mod tests {
             (
                 "MeshHeader",
                 size_of::<MeshHeader>(),
-                vec![0, 12, 16, 20, 24, 28, 32, 36, 40],
+                vec![0, 12, 16, 20, 24, 28, 32, 36, 40, 44],
             ),
         ];
         for (name, size, offsets) in expected {

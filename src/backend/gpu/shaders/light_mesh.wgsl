@@ -21,7 +21,8 @@
 
 @group(0) @binding(ITEMS) var<storage, read> points: array<SurfacePoint>;
 @group(0) @binding(ANSWERS) var<storage, read_write> direct: array<DirectLight>;
-// Per point, a bit per light that can reach it (`light_mesh_coverage.wgsl`).
+// Per point, a bit per light that can reach it, then one per lamp among
+// them that is not faint (`light_mesh_coverage.wgsl`).
 @group(0) @binding(REACH) var<storage, read> reach: array<u32>;
 // Candidates, interpolation-set sizes, point-to-node segments, fallback
 // points and blocker rays, each as a (low, high) pair of u32; then the
@@ -78,20 +79,16 @@ fn is_kept(place: u32) -> bool {
 
 // Whether the wide set keeps the node whose mask is `mask`: not an
 // enclosed node blocked from a lamp the set was demanded for (the point's
-// reaching lamps). Inside closed geometry most lights are blocked, so the
-// first blocked one mostly settles it.
+// reaching lamps but the faint ones).
 fn wide_kept(mask: NodeMask, reach_base: u32) -> bool {
     if !mask.enclosed {
         return true;
     }
-    for (var word = 0u; word < directory.header.light_words; word++) {
-        var blocked = reach[reach_base + word] & valid(mask, word) & ~visible(mask, word);
-        while blocked != 0u {
-            let bit = firstTrailingBit(blocked);
-            blocked &= blocked - 1u;
-            if is_lamp(lights[word * 32u + bit]) {
-                return false;
-            }
+    let light_words = directory.header.light_words;
+    for (var word = 0u; word < light_words; word++) {
+        let refined = reach[reach_base + light_words + word];
+        if (refined & valid(mask, word) & ~visible(mask, word)) != 0u {
+            return false;
         }
     }
     return true;
@@ -547,7 +544,7 @@ fn shade(index: u32) {
     let wide_ball = half_ball_at(point.position, point.geometric_normal, WIDE_STEPS);
     let origin = offset_ray_origin(point.position, point.geometric_normal);
     let light_words = directory.header.light_words;
-    let reach_base = index * light_words;
+    let reach_base = index * 2u * light_words;
     settle_kept(ball, origin, reach_base);
     let first_tally = tally(ball, reach_base, 0u);
     let total = first_tally.total;
@@ -577,7 +574,8 @@ fn shade(index: u32) {
         // nearest blocked node of those and of the lamps the set disagrees
         // on.
         let lamps = reach[reach_base + word] & lamp_bits(word);
-        let agreed = select(0u, lamps & (t.all | ~t.any), asks_wide_set());
+        let refined = reach[reach_base + light_words + word];
+        let agreed = select(0u, refined & (t.all | ~t.any), asks_wide_set());
         let wide = wide_disagreements(wide_ball, reach_base, word, agreed);
         nearest_found = 0u;
         find_nearest_blocked(ball, false, reach_base, word, lamps & t.any & ~t.all);
@@ -594,15 +592,18 @@ fn shade(index: u32) {
             // The wide set disagrees on this lamp; or every node sees this
             // light: where it grazes the surface a ray towards its point
             // nearest the surface may find the point in a wedge of
-            // penumbra no node reaches; or the nodes disagree on it.
+            // penumbra no node reaches; or the nodes disagree on it. A
+            // faint lamp keeps the set's answer (`lightmesh/faint.rs`).
+            let sized = ((~lamps | refined) >> bit & 1u) != 0u;
             let in_wide = (wide >> bit & 1u) != 0u;
             let seen_by_all = (t.all >> bit & 1u) != 0u;
             var sizing = SIZED_BY_NOTHING;
             if in_wide {
                 sizing = SIZED_BY_WIDE_BLOCKER;
             } else if seen_by_all {
-                sizing = select(SIZED_BY_NOTHING, SIZED_BY_GRAZING_RAY, probes_grazing_lamps());
-            } else if directory.header.penumbra != PENUMBRA_FIXED {
+                let probes = probes_grazing_lamps() && sized;
+                sizing = select(SIZED_BY_NOTHING, SIZED_BY_GRAZING_RAY, probes);
+            } else if directory.header.penumbra != PENUMBRA_FIXED && sized {
                 sizing = SIZED_BY_BLOCKER;
             }
             let share = lamp_share(point, origin, bit, light, sizing);

@@ -7,7 +7,8 @@
 // the masks are reused, a frame reads back a few points instead of all.
 
 @group(0) @binding(ITEMS) var<storage, read> points: array<SurfacePoint>;
-// Per point, `light_words` u32 of reaching-light bits.
+// Per point, `light_words` u32 of reaching-light bits, then as many of
+// the lamps among them that are not faint (`faint.wgsl`).
 @group(0) @binding(ANSWERS) var<storage, read_write> reach: array<u32>;
 // A bit per point, set where the pool does not serve it yet; then a bit
 // per pool slot, set where a point read the slot's brick (the CPU then
@@ -49,7 +50,7 @@ fn light_mesh_coverage(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let light_words = directory.header.light_words;
-    let base = index * light_words;
+    let base = index * 2u * light_words;
     let surface = points[index];
     var any_light = 0u;
     let point = shade_point(surface);
@@ -67,6 +68,7 @@ fn light_mesh_coverage(@builtin(global_invocation_id) id: vec3<u32>) {
     if any_light == 0u {
         return;
     }
+    mark_refined_lamps(point, base);
     var marked = -1;
     var nodes = walk(half_ball(point.position, point.geometric_normal));
     while next_node(&nodes) {
@@ -76,9 +78,10 @@ fn light_mesh_coverage(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         mark_read_slot(&marked);
     }
-    // The wide set's nodes, for the point's lamps (`light_mesh.wgsl`).
+    // The wide set's nodes, for the point's lamps but the faint ones
+    // (`light_mesh.wgsl`).
     for (var word = 0u; word < light_words && asks_wide_set(); word++) {
-        let lamps = reach[base + word] & lamp_bits(word);
+        let lamps = reach[base + light_words + word];
         if lamps == 0u {
             continue;
         }

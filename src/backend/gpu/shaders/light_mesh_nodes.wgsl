@@ -19,6 +19,9 @@ struct MeshHeader {
     // How lamps' sets are sized (`lightmesh/penumbra.rs`): PENUMBRA_FIXED,
     // PENUMBRA_BLOCKER, or PENUMBRA_WIDE where the wide set is also asked.
     penumbra: u32,
+    // The faint lamps' budget, ε in steps of 2^-FAINT_BUDGET_BITS
+    // (`faint.wgsl`); 0 sizes every lamp's penumbra.
+    faint_parts: u32,
 }
 
 struct Directory {

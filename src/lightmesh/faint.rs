@@ -1,0 +1,257 @@
+//! The lamps a point leaves at the half-ball's answer: the faint ones.
+//!
+//! `penumbra: blocker` and `wide` refine a lamp's share at a point with
+//! rays (the blocker's, the grazing probe's, a level's node segments), one
+//! set per (point, lamp) pair, so they scale like Whitted's shadow rays.
+//! On a street of 64 lamps most of those pairs are far lamps that bring a
+//! point almost nothing. Refining a lamp moves its term by at most the
+//! term itself (a share stays within [0, 1]), so a point may leave a set
+//! of lamps at the answer `fixed` gives (the half-ball's share; full where
+//! every node sees the lamp) if their unshadowed terms add up to at most a
+//! share ε (`lightmesh.faint_lamps`) of the point's unshadowed lamp light.
+//! The point's light then moves by at most ε of its unshadowed light,
+//! which is the denominator of STUDY.md's error, so ε bounds what the rule
+//! adds to a pixel's error there; ε = 0 refines every lamp.
+//!
+//! The rule is integer arithmetic on the bits of each lamp's term (its
+//! largest channel, a positive normal f32), so that the GPU's shader
+//! (`light_mesh.wgsl`) skips the same lamps and the frames keep their
+//! bits whatever order either side adds in:
+//! - E is the largest exponent among the point's lamps. A lamp of exponent
+//!   e and significand m (24 bits, the implicit one included) brings
+//!   m / 2^(E−e) in units of 2^(E−150), so the brightest brings ≥ 2^23.
+//! - Bucket d = min(E − e, [`LAST_BUCKET`]) holds the sum of its lamps'
+//!   m (saturating). Bucket d's light is at most ⌈sum / 2^d⌉ (the last
+//!   bucket's lamps, each under 2^24 / 2^d, too), and at least ⌊sum / 2^d⌋
+//!   for every bucket but the last.
+//! - The point's light, rounded down, is the buckets' floors, the last left
+//!   out; the budget is that over 2^16 times ⌊ε·2^16⌋ ([`budget_parts`]).
+//! - Buckets are skipped from the faintest towards the brightest while the
+//!   skipped light, rounded up, stays within the budget; bucket 0 never is.
+//!
+//! Lamps whose term's exponent field is zero (none, or subnormal: a GPU
+//! may flush those) take no part and are never faint.
+
+use crate::bits::set_bits;
+use crate::render::omega::{LightLanes, PointLanes, LANES};
+
+/// Buckets 0 to `LAST_BUCKET`: lamps 2^24 times fainter than the brightest
+/// and beyond share the last.
+pub const LAST_BUCKET: u32 = 24;
+/// Buckets in all.
+pub const BUCKETS: usize = LAST_BUCKET as usize + 1;
+/// The first bucket no lamp is in: what [`FaintLamps::faintest_kept`] is
+/// when none is faint.
+pub const NO_FAINT_BUCKET: u32 = LAST_BUCKET + 1;
+/// ε is applied in steps of 2^-16.
+pub const BUDGET_BITS: u32 = 16;
+/// The largest ε: the budget's product stays within 32 bits.
+pub const MAX_FAINT_SHARE: f32 = 0.5;
+
+/// ⌊ε·2^16⌋ for `share` = ε in [0, [`MAX_FAINT_SHARE`]]: the budget's
+/// factor, which the GPU receives as it is.
+pub fn budget_parts(share: f32) -> u32 {
+    (share.clamp(0.0, MAX_FAINT_SHARE) * (1 << BUDGET_BITS) as f32) as u32
+}
+
+/// The exponent field of a lamp's term (its largest channel), 0 where it
+/// takes no part in the rule.
+pub fn exponent(term: f32) -> u32 {
+    term.to_bits() >> 23 & 0xff
+}
+
+/// The 24-bit significand of a normal term.
+fn significand(term: f32) -> u32 {
+    term.to_bits() & 0x7f_ffff | 0x80_0000
+}
+
+/// The faint lamps of one point, found from its lamps' terms in two
+/// passes: [`FaintLamps::brightest`] over them all, then
+/// [`FaintLamps::add`] of each, then [`FaintLamps::faintest_kept`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FaintLamps {
+    /// E, the largest exponent field (0 for a point with no lamp light).
+    brightest: u32,
+    /// Per bucket, its lamps' significands summed, saturating.
+    buckets: [u32; BUCKETS],
+}
+
+impl FaintLamps {
+    /// Ready to [`FaintLamps::add`] lamps at a point whose brightest lamp
+    /// term has exponent field `brightest` (the largest [`exponent`]).
+    pub fn brightest(brightest: u32) -> FaintLamps {
+        FaintLamps {
+            brightest,
+            buckets: [0; BUCKETS],
+        }
+    }
+
+    /// The bucket of a lamp whose term is `term`; `None` where it takes no
+    /// part.
+    pub fn bucket(&self, term: f32) -> Option<u32> {
+        let exponent = exponent(term);
+        (exponent != 0).then(|| (self.brightest - exponent).min(LAST_BUCKET))
+    }
+
+    /// Counts the lamp whose term is `term` into its bucket.
+    pub fn add(&mut self, term: f32) {
+        if let Some(bucket) = self.bucket(term) {
+            let sum = &mut self.buckets[bucket as usize];
+            *sum = sum.saturating_add(significand(term));
+        }
+    }
+
+    /// The first bucket whose lamps are faint under the budget of
+    /// `parts` ([`budget_parts`]): a lamp is faint where its bucket is at
+    /// least this; [`NO_FAINT_BUCKET`] where none is.
+    pub fn faintest_kept(&self, parts: u32) -> u32 {
+        let light = (0..LAST_BUCKET)
+            .map(|bucket| self.buckets[bucket as usize] >> bucket)
+            .fold(0u32, u32::saturating_add);
+        let budget = (light >> BUDGET_BITS) * parts;
+        let mut skipped = 0u32;
+        let mut first_faint = NO_FAINT_BUCKET;
+        for bucket in (1..=LAST_BUCKET).rev() {
+            skipped = skipped.saturating_add(rounded_up(self.buckets[bucket as usize], bucket));
+            if skipped > budget {
+                break;
+            }
+            first_faint = bucket;
+        }
+        first_faint
+    }
+}
+
+/// One thread's working space for [`mark`]: the terms of the point at
+/// hand's lamps.
+#[derive(Default)]
+pub struct FaintScratch {
+    terms: Vec<(usize, f32)>,
+}
+
+/// Sets in `faint` (a bit per light, 64 to a word) the faint lamps among
+/// `lamps` (the point's lamps that may reach it, the same layout) at the
+/// point `at`, under the budget of `parts` ([`budget_parts`]). A lamp's
+/// term is its Omega's largest channel, as formula (2) will weigh it.
+pub fn mark(
+    lights: &LightLanes,
+    at: &PointLanes,
+    lamps: &[u64],
+    parts: u32,
+    scratch: &mut FaintScratch,
+    faint: &mut [u64],
+) {
+    faint.fill(0);
+    if parts == 0 {
+        return;
+    }
+    let terms = &mut scratch.terms;
+    terms.clear();
+    for (word, &bits) in lamps.iter().enumerate() {
+        for block_in_word in 0..64 / LANES {
+            let first = block_in_word * LANES;
+            let lanes = (bits >> first) as u8;
+            if lanes == 0 {
+                continue;
+            }
+            let omega = lights.omega(at, word * 64 / LANES + block_in_word);
+            for lane in set_bits((lanes & omega.reaching).into()) {
+                terms.push((word * 64 + first + lane, omega.get(lane).max_element()));
+            }
+        }
+    }
+    let brightest = terms.iter().map(|&(_, term)| exponent(term)).max();
+    let mut buckets = FaintLamps::brightest(brightest.unwrap_or(0));
+    terms.iter().for_each(|&(_, term)| buckets.add(term));
+    let first_faint = buckets.faintest_kept(parts);
+    for &(light, term) in terms.iter() {
+        if buckets
+            .bucket(term)
+            .is_some_and(|bucket| bucket >= first_faint)
+        {
+            faint[light / 64] |= 1 << (light % 64);
+        }
+    }
+}
+
+/// ⌈sum / 2^`bucket`⌉, for `bucket` ≤ [`LAST_BUCKET`].
+fn rounded_up(sum: u32, bucket: u32) -> u32 {
+    (sum >> bucket) + u32::from(sum & ((1 << bucket) - 1) != 0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The faint flags of `terms` under `share`, as a point finds them.
+    fn faint(terms: &[f32], share: f32) -> Vec<bool> {
+        let brightest = terms.iter().map(|&t| exponent(t)).max().unwrap_or(0);
+        let mut lamps = FaintLamps::brightest(brightest);
+        terms.iter().for_each(|&term| lamps.add(term));
+        let first = lamps.faintest_kept(budget_parts(share));
+        terms
+            .iter()
+            .map(|&term| lamps.bucket(term).is_some_and(|bucket| bucket >= first))
+            .collect()
+    }
+
+    #[test]
+    fn far_lamps_are_faint_and_near_ones_are_not() {
+        // One near lamp and three a hundred times fainter: together 3% of
+        // the light, under a budget of 1/16.
+        let terms = [1.0, 0.01, 0.01, 0.01];
+        assert_eq!(faint(&terms, 1.0 / 16.0), [false, true, true, true]);
+        // Under 1/64 only those rounding shows to be within it.
+        assert_eq!(faint(&terms, 1.0 / 64.0), [false; 4]);
+        // ε = 0 refines every lamp.
+        assert_eq!(faint(&terms, 0.0), [false; 4]);
+    }
+
+    #[test]
+    fn equal_lamps_and_a_lone_lamp_are_never_faint() {
+        assert_eq!(faint(&[0.3; 8], MAX_FAINT_SHARE), [false; 8]);
+        assert_eq!(faint(&[1e-30], MAX_FAINT_SHARE), [false]);
+        assert_eq!(faint(&[], MAX_FAINT_SHARE), Vec::<bool>::new());
+    }
+
+    #[test]
+    fn subnormal_and_zero_terms_take_no_part() {
+        let terms = [1.0, 0.0, f32::from_bits(1), 1e-9];
+        assert_eq!(faint(&terms, 1.0 / 16.0), [false, false, false, true]);
+    }
+
+    #[test]
+    fn huge_counts_of_huge_terms_saturate_without_skipping_the_brightest() {
+        let mut terms = vec![f32::MAX; 300];
+        terms.extend([1e-20; 300]);
+        let flags = faint(&terms, MAX_FAINT_SHARE);
+        assert!(flags[..300].iter().all(|&faint| !faint));
+        assert!(flags[300..].iter().all(|&faint| faint));
+    }
+
+    proptest! {
+        /// The bound the rule exists for: the faint lamps' terms add up to
+        /// at most ε of all the terms, and the brightest is never faint.
+        #[test]
+        fn faint_lamps_bring_at_most_the_share(
+            terms in prop::collection::vec(
+                prop_oneof![1e-12f32..1e-6, 1e-6f32..1e-2, 1e-2f32..10.0], 1..80),
+            share in 0.0f32..=MAX_FAINT_SHARE,
+        ) {
+            let flags = faint(&terms, share);
+            let total: f64 = terms.iter().map(|&t| t as f64).sum();
+            let skipped: f64 = (terms.iter().zip(&flags))
+                .filter(|(_, &faint)| faint)
+                .map(|(&t, _)| t as f64)
+                .sum();
+            prop_assert!(skipped <= share as f64 * total, "{skipped} of {total}");
+            let brightest = terms.iter().cloned().fold(0.0f32, f32::max);
+            let at = terms.iter().position(|&t| t == brightest).unwrap();
+            prop_assert!(!flags[at]);
+            // A larger share leaves at least the same lamps faint.
+            let wider = faint(&terms, (share * 2.0).min(MAX_FAINT_SHARE));
+            prop_assert!(flags.iter().zip(&wider).all(|(&a, &b)| !a || b));
+        }
+    }
+}
