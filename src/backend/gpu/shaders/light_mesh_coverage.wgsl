@@ -65,10 +65,11 @@ fn light_mesh_coverage(@builtin(global_invocation_id) id: vec3<u32>) {
         reach[base + word] = bits;
         any_light |= bits;
     }
+    // Written for every point, so no word of the buffer is stale.
+    mark_refined_lamps(point, base);
     if any_light == 0u {
         return;
     }
-    mark_refined_lamps(point, base);
     var marked = -1;
     var nodes = walk(half_ball(point.position, point.geometric_normal));
     while next_node(&nodes) {
