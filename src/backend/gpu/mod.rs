@@ -37,6 +37,7 @@ mod pass;
 mod pipeline_cache;
 mod pipeline_file;
 mod pipelines;
+mod recording;
 mod scatter;
 pub(crate) mod scene;
 mod shaders;
