@@ -115,13 +115,17 @@ mod tests {
 
     #[test]
     fn a_frames_materials_bound_the_rays_a_point_spawns() {
-        let matte = Material::default();
+        let matte = Material {
+            metallic: 0.0,
+            ..Material::default()
+        };
         let mirror = Material {
             metallic: 1.0,
             roughness: 0.0,
             ..Material::default()
         };
         let glass = Material {
+            metallic: 0.0,
             transmission: 1.0,
             ..Material::default()
         };

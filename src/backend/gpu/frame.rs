@@ -35,10 +35,8 @@ use crate::accel::Ray;
 use crate::backend::aov::{AovFrame, BandSamples};
 use crate::backend::sampling::lamp_sample;
 use crate::backend::RenderError;
-use crate::render::scatter::most_secondary_rays;
 use crate::render::surface::ShadingPoint;
 use crate::render::{area, FrameJob};
-use crate::scene::Material;
 use crate::stats::{ClassRays, FrameStats};
 
 /// Points whose lamp samples go to the GPU together (`--method area`): at
@@ -64,6 +62,10 @@ pub struct Frame<'a> {
     pub scene_surfaces: &'a SceneSurfaces,
     pub frame_surfaces: &'a FrameSurfaces,
     pub lights: FrameLights,
+    /// The most secondary rays a point spawns, over the frame's materials
+    /// and the default one (`most_secondary_rays`): it bounds each next
+    /// level's length.
+    pub rays_per_point: usize,
 }
 
 impl Frame<'_> {
@@ -270,14 +272,12 @@ impl Frame<'_> {
         if depth >= self.job.max_depth {
             return Ok(Vec::new());
         }
-        let materials = self.job.frame.materials.iter();
-        let rays_per_point = most_secondary_rays(materials.chain([&Material::default()]));
         (self.pipelines.scatter).next_level(
             self.context,
             recording,
             self.scene,
             level,
-            rays_per_point,
+            self.rays_per_point,
             film.counters(),
         )
     }
