@@ -16,7 +16,7 @@ use glam::Vec3;
 
 use lmanim::backend::gpu::traffic::GpuTraffic;
 
-use lmanim::backend::{Backend, GpuBackend};
+use lmanim::backend::Backend;
 use lmanim::scene::SceneDesc;
 use lmanim::sequence::Sequence;
 use lmanim::settings::{BackendKind, Method, Settings};
@@ -115,8 +115,7 @@ fn a_whitted_frame_waits_once_for_its_pixels_and_its_counters() {
 /// are the CPU's count.
 #[test]
 fn mirror_levels_wait_for_no_length() {
-    let Some(gpu) = GpuBackend::new(Some(2)).ok().map(Box::new) else {
-        eprintln!("skipped: no GPU adapter");
+    let Some(gpu) = common::gpu::backend() else {
         return;
     };
     let mut scene = box_on_a_floor(1.0);
@@ -125,7 +124,8 @@ fn mirror_levels_wait_for_no_length() {
         material.roughness = 0.0;
     }
     let settings = settings_for(Method::Whitted);
-    let [on_gpu] = &frames_on(Backend::Gpu(gpu), scene.clone(), &settings, &[0.0])[..] else {
+    let gpu = Backend::Gpu(Box::new(gpu));
+    let [on_gpu] = &frames_on(gpu, scene.clone(), &settings, &[0.0])[..] else {
         unreachable!("one frame")
     };
     let cpu = Backend::new(BackendKind::Cpu, Some(2)).unwrap();

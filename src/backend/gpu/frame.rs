@@ -141,33 +141,48 @@ impl Frame<'_> {
             stats.add_stage_time("secondary", start.elapsed().as_secs_f64());
 
             let start = Instant::now();
-            let mut downloads = Downloads::default();
-            let film_parts = film.develop(
-                &self.pipelines.film,
-                context,
-                recording.encoder(),
-                self.scene,
-                &mut downloads,
-            );
-            let aov_parts = (aov_film.as_ref()).map(|aov_film| aov_film.develop(&mut downloads));
-            let counts = match &*method {
-                DirectMethod::LightMesh(light_mesh) => Some(light_mesh.download(&mut downloads)),
-                DirectMethod::Whitted | DirectMethod::Area => None,
-            };
-            let why = "the band's pixels and counters (and AOV samples, formula (2)'s counters)";
-            let downloaded = recording.wait(why, downloads)?;
-            let developed = film_parts.developed(&downloaded);
-            if let (DirectMethod::LightMesh(light_mesh), Some(counts)) = (method, counts) {
-                light_mesh.counted(&downloaded, counts);
-            }
-            stats.rays.secondary += developed.secondary_rays;
-            stats.rays.shadow += developed.other_rays + developed.class_rays.total();
-            stats.shadow_classes.add_rays(developed.class_rays);
-            stats.shading_points += developed.shading_points;
-            let samples = aov_parts.map(|parts| parts.samples(&downloaded));
+            let developed = self.develop(recording, films, method, stats)?;
             stats.add_stage_time("resolve", start.elapsed().as_secs_f64());
-            Ok((developed.pixels, samples))
+            Ok(developed)
         })
+    }
+
+    /// Records the band's resolve and waits for it, the band's one wait:
+    /// its pixels, the film's counters (the secondary rays among them,
+    /// which go to `stats` with the shading points and shadow rays), the
+    /// AOV samples and formula (2)'s counters come back in one map.
+    fn develop(
+        &self,
+        mut recording: Recording,
+        (film, aov_film): (&Film, Option<&AovFilm>),
+        method: &mut DirectMethod,
+        stats: &mut FrameStats,
+    ) -> Result<(Vec<Vec4>, Option<BandSamples>), GpuError> {
+        let mut downloads = Downloads::default();
+        let film_parts = film.develop(
+            &self.pipelines.film,
+            self.context,
+            recording.encoder(),
+            self.scene,
+            &mut downloads,
+        );
+        let aov_parts = aov_film.map(|aov_film| aov_film.develop(&mut downloads));
+        let counts = match &*method {
+            DirectMethod::LightMesh(light_mesh) => Some(light_mesh.download(&mut downloads)),
+            DirectMethod::Whitted | DirectMethod::Area => None,
+        };
+        let why = "the band's pixels and counters (and AOV samples, formula (2)'s counters)";
+        let downloaded = recording.wait(why, downloads)?;
+        let developed = film_parts.developed(&downloaded);
+        if let (DirectMethod::LightMesh(light_mesh), Some(counts)) = (method, counts) {
+            light_mesh.counted(&downloaded, counts);
+        }
+        stats.rays.secondary += developed.secondary_rays;
+        stats.rays.shadow += developed.other_rays + developed.class_rays.total();
+        stats.shadow_classes.add_rays(developed.class_rays);
+        stats.shading_points += developed.shading_points;
+        let samples = aov_parts.map(|parts| parts.samples(&downloaded));
+        Ok((developed.pixels, samples))
     }
 
     /// Records a level's closest hits, shading points, direct light and
