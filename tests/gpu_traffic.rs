@@ -1,22 +1,33 @@
 //! What crosses between the CPU and the GPU in a frame (`--stats`'s `gpu`
 //! object): counted where it crosses, so a frame's waits and bytes are
-//! exact. A Whitted frame in one band without mirrors waits three times
-//! (for the length of the next level of rays, none here; the band's
-//! pixels; its counters) and reads back exactly those; a light-mesh frame waits more, per level, which is what
-//! the GPU-resident light mesh (issue 33) must bring down to two.
+//! exact. A Whitted frame in one band waits once, at the band's end, for
+//! its pixels and its counters together, mirrors or not: each next level's
+//! length stays on the GPU, which dispatches the level's passes
+//! indirectly and counts its rays with the film's counters. A light-mesh
+//! frame waits once more per level, for the coverage flags its points'
+//! demand on the CPU needs, and where some points are not served, for
+//! those points and their fill's segments; demand and fill on the GPU
+//! (issue 33) are what remove those.
 
 mod common;
 
 use common::*;
 use glam::Vec3;
 
+use lmanim::backend::gpu::traffic::GpuTraffic;
+
+use lmanim::backend::Backend;
 use lmanim::scene::SceneDesc;
 use lmanim::sequence::Sequence;
-use lmanim::settings::{Method, Settings};
+use lmanim::settings::{BackendKind, Method, Settings};
 use lmanim::stats::FrameStats;
 
 const WIDTH: u32 = 48;
 const HEIGHT: u32 = 32;
+/// What a frame of one band reads back at its end: its pixels and the
+/// film's seven counters (shading points, other rays, three classes of
+/// shadow rays, secondary rays).
+const BAND_BYTES: u64 = (WIDTH * HEIGHT) as u64 * 16 + 7 * 4;
 
 /// A box on a floor under a lamp, seen from above, the camera dollying
 /// in over `seconds` (it moves, so no frame is a copy, and it
@@ -39,21 +50,31 @@ fn box_on_a_floor(seconds: f32) -> SceneDesc {
     scene
 }
 
-/// Each of `times` rendered in one sequence on the GPU, with its stats.
-fn frames_on_the_gpu(settings: &Settings, times: &[f64]) -> Option<Vec<FrameStats>> {
-    let (mut gpu, _) = common::gpu::backend_to_compare()?;
-    let mut sequence = Sequence::new(box_on_a_floor(1.0), "box".into()).unwrap();
-    let frames = (times.iter())
+/// Each of `times` of `scene` rendered in one sequence on `backend`, with
+/// its stats.
+fn frames_on(
+    mut backend: Backend,
+    scene: SceneDesc,
+    settings: &Settings,
+    times: &[f64],
+) -> Vec<FrameStats> {
+    let mut sequence = Sequence::new(scene, "box".into()).unwrap();
+    (times.iter())
         .map(|&time| {
             let mut stats = FrameStats::default();
             let placed = sequence.advance(time, settings, &mut stats).unwrap();
             sequence
-                .render(&mut gpu, &placed, settings, &mut stats)
+                .render(&mut backend, &placed, settings, &mut stats)
                 .unwrap();
             stats
         })
-        .collect();
-    Some(frames)
+        .collect()
+}
+
+/// Each of `times` rendered in one sequence on the GPU, with its stats.
+fn frames_on_the_gpu(settings: &Settings, times: &[f64]) -> Option<Vec<FrameStats>> {
+    let (gpu, _) = common::gpu::backend_to_compare()?;
+    Some(frames_on(gpu, box_on_a_floor(1.0), settings, times))
 }
 
 fn settings_for(method: Method) -> Settings {
@@ -63,57 +84,113 @@ fn settings_for(method: Method) -> Settings {
     settings
 }
 
+fn traffic(stats: &FrameStats) -> GpuTraffic {
+    stats
+        .gpu
+        .as_ref()
+        .expect("the GPU backend reports its traffic")
+        .traffic
+}
+
 #[test]
-fn a_whitted_frame_waits_for_its_level_its_pixels_and_its_counters() {
+fn a_whitted_frame_waits_once_for_its_pixels_and_its_counters() {
     let Some(frames) = frames_on_the_gpu(&settings_for(Method::Whitted), &[0.0, 0.5]) else {
         return;
     };
-    let pixels = u64::from(WIDTH * HEIGHT) * 16;
-    let (counters, next_level_length) = (6 * 4, 4);
     for stats in &frames {
-        let gpu = stats
-            .gpu
-            .as_ref()
-            .expect("the GPU backend reports its traffic")
-            .traffic;
-        assert_eq!(gpu.waits, 3, "{gpu:?}");
-        assert_eq!(
-            gpu.bytes_down,
-            next_level_length + pixels + counters,
-            "{gpu:?}"
-        );
+        let gpu = traffic(stats);
+        assert_eq!(gpu.waits, 1, "{gpu:?}");
+        assert_eq!(gpu.bytes_down, BAND_BYTES, "{gpu:?}");
         assert!(gpu.bytes_up > 0, "the frame's uniforms at least");
     }
     // The world went up with the first frame; the second sends only what
     // changed (the camera's rays are made on the GPU).
-    let traffic = |i: usize| frames[i].gpu.as_ref().unwrap().traffic;
-    let up = |i: usize| traffic(i).bytes_up;
+    let up = |i: usize| traffic(&frames[i]).bytes_up;
     assert!(up(1) < up(0), "first {} bytes up, then {}", up(0), up(1));
 }
 
+/// Every surface of the box and the floor a mirror: five levels of
+/// mirror rays, each dispatched from the length the compaction wrote,
+/// and still one wait. The secondary rays the film's counters bring back
+/// are the CPU's count.
 #[test]
-fn a_light_mesh_frame_counts_its_waits_and_its_mask_traffic() {
-    let Some(frames) = frames_on_the_gpu(&settings_for(Method::Lmm1), &[0.0, 0.5]) else {
+fn mirror_levels_wait_for_no_length() {
+    let Some(gpu) = common::gpu::backend() else {
         return;
     };
-    let traffic = |i: usize| frames[i].gpu.as_ref().unwrap().traffic;
-    let (cold, steady) = (traffic(0), traffic(1));
-    let bricks = |stats: &FrameStats| stats.lightmesh.unwrap().bricks_uploaded;
-    eprintln!(
-        "cold {cold:?}, {} bricks up; steady {steady:?}, {} bricks up",
-        bricks(&frames[0]),
-        bricks(&frames[1])
+    let mut scene = box_on_a_floor(1.0);
+    for material in &mut scene.materials {
+        material.metallic = 1.0;
+        material.roughness = 0.0;
+    }
+    let settings = settings_for(Method::Whitted);
+    let gpu = Backend::Gpu(Box::new(gpu));
+    let [on_gpu] = &frames_on(gpu, scene.clone(), &settings, &[0.0])[..] else {
+        unreachable!("one frame")
+    };
+    let cpu = Backend::new(BackendKind::Cpu, Some(2)).unwrap();
+    let [on_cpu] = &frames_on(cpu, scene, &settings, &[0.0])[..] else {
+        unreachable!("one frame")
+    };
+    let gpu = traffic(on_gpu);
+    assert_eq!(gpu.waits, 1, "{gpu:?}");
+    assert_eq!(gpu.bytes_down, BAND_BYTES, "{gpu:?}");
+    assert!(on_cpu.rays.secondary > 0);
+    assert_eq!(on_gpu.rays, on_cpu.rays);
+}
+
+/// The box under its lamp, the camera still, and a tile far below the
+/// floor sliding over `seconds`: frames after the first are steady, every
+/// point served by masks the pool already holds (no point sees the tile,
+/// and no segment from the floor's nodes to the lights above passes
+/// near it).
+fn a_tile_sliding_far_below(seconds: f32) -> SceneDesc {
+    let (mut scene, _) = box_under_a_lamp();
+    let grey = add_material(&mut scene, lambert(Vec3::splat(0.5)));
+    let tile = add_quads(&mut scene, &[floor_quad(-50.0, 1.0)], 1, grey);
+    let slide = linear_translation(tile, Vec3::ZERO, Vec3::X, seconds);
+    scene.nodes[tile].animated = true;
+    scene
+        .animations
+        .push(lmanim::scene::animation::AnimationClip {
+            name: Some("slide".into()),
+            channels: vec![slide],
+        });
+    scene
+}
+
+#[test]
+fn a_light_mesh_frame_waits_for_its_coverage_flags_and_its_band() {
+    let settings = settings_for(Method::Lmm1);
+    let Some(dolly) = frames_on_the_gpu(&settings, &[0.0, 0.5]) else {
+        return;
+    };
+    let (gpu, _) = common::gpu::backend_to_compare().expect("a GPU, as above");
+    let still = frames_on(gpu, a_tile_sliding_far_below(1.0), &settings, &[0.0, 0.5]);
+    let [cold, moved, steady] = [&dolly[0], &dolly[1], &still[1]].map(traffic);
+    let lightmesh = |stats: &FrameStats| stats.lightmesh.unwrap();
+    eprintln!("cold {cold:?}, moved {moved:?}, steady {steady:?}");
+    // The CPU owns the masks. The frame's one level (no mirrors) waits
+    // for its points' coverage flags; where the pool does not serve every
+    // point (the cold frame, and the camera's new view), also for those
+    // points and for the fill's segments. Then the band's one wait brings
+    // the pixels, the film's counters and formula (2)'s counters back
+    // together.
+    assert_eq!(cold.waits, 4, "{cold:?}");
+    assert_eq!(moved.waits, 4, "{moved:?}");
+    assert_eq!(steady.waits, 2, "{steady:?}");
+    assert!(lightmesh(&dolly[0]).points_demanded > 0);
+    assert!(lightmesh(&dolly[1]).points_demanded > 0);
+    let steady_work = lightmesh(&still[1]);
+    assert_eq!(
+        (steady_work.points_demanded, steady_work.bricks_uploaded),
+        (0, 0)
     );
-    // Today the CPU owns the masks: each level waits for the points'
-    // coverage, their demand and fill, and formula (2)'s counters, beside
-    // the film's two.
-    assert!(cold.waits > 2, "{cold:?}");
-    assert!(steady.waits >= 2, "{steady:?}");
-    assert!(bricks(&frames[0]) > 0);
     use lmanim::backend::gpu::mask_pool::MaskPool;
     let brick_bytes = MaskPool::slot_bytes(MaskPool::light_words(2)) as u64;
+    let bricks = lightmesh(&dolly[0]).bricks_uploaded;
     assert!(
-        cold.bytes_up >= bricks(&frames[0]) * brick_bytes,
+        bricks > 0 && cold.bytes_up >= bricks * brick_bytes,
         "{cold:?}"
     );
 }

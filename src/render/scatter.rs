@@ -3,12 +3,14 @@
 //! them spawn any (see `SurfaceMaterial::reflects` / `transmits`), so a
 //! scene without mirrors or glass traces no secondary rays at all.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::brdf;
+use super::material::SurfaceMaterial;
 use super::surface::ShadingPoint;
 use crate::accel::offset::offset_ray_origin;
 use crate::accel::Ray;
+use crate::scene::Material;
 
 /// A ray continuing a camera path, and the throughput it carries.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -57,6 +59,21 @@ pub fn secondary_rays(point: &ShadingPoint) -> impl Iterator<Item = SecondaryRay
     reflection.into_iter().chain(refraction)
 }
 
+/// The most secondary rays one point of any of `materials` spawns (0, 1
+/// or 2): whether a material reflects or transmits depends on its factors
+/// alone, never on a texture, so a frame's materials bound each level of
+/// its recursion before the level is made (the GPU sizes levels so).
+pub fn most_secondary_rays<'m>(materials: impl IntoIterator<Item = &'m Material>) -> usize {
+    let most = |material: &Material| {
+        let material = SurfaceMaterial::at(material, &[], Vec2::ZERO);
+        match (material.transmits(), material.reflects()) {
+            (true, _) => 2,
+            (false, reflects) => usize::from(reflects),
+        }
+    };
+    materials.into_iter().map(most).max().unwrap_or(0)
+}
+
 /// Mirror direction of `v` (pointing away from the surface) about `n`.
 fn reflect(v: Vec3, n: Vec3) -> Vec3 {
     2.0 * n.dot(v) * n - v
@@ -95,6 +112,28 @@ fn dielectric_fresnel(cos_i: f32, eta: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_frames_materials_bound_the_rays_a_point_spawns() {
+        let matte = Material {
+            metallic: 0.0,
+            ..Material::default()
+        };
+        let mirror = Material {
+            metallic: 1.0,
+            roughness: 0.0,
+            ..Material::default()
+        };
+        let glass = Material {
+            metallic: 0.0,
+            transmission: 1.0,
+            ..Material::default()
+        };
+        assert_eq!(most_secondary_rays([&matte]), 0);
+        assert_eq!(most_secondary_rays([&matte, &mirror]), 1);
+        assert_eq!(most_secondary_rays([&mirror, &glass, &matte]), 2);
+        assert_eq!(most_secondary_rays([]), 0);
+    }
 
     #[test]
     fn reflection_mirrors_about_the_normal() {

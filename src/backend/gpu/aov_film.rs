@@ -14,7 +14,8 @@ use super::context::{GpuContext, GpuError};
 use super::contract::{ENVIRONMENT, ITEMS, PATHS, POINT_LAYERS};
 use super::film::Film;
 use super::layered::PointLayers;
-use super::pass::{answer_buffer, read_back, Dispatch, WorldPass, WorldUse};
+use super::pass::{answer_buffer, WorldPass, WorldUse};
+use super::recording::{Downloaded, Downloads, Part};
 use super::scene::GpuScene;
 use super::shaders::Entry;
 use super::surface::LevelBuffers;
@@ -125,7 +126,7 @@ impl AovFilm {
         level: &LevelBuffers,
     ) {
         let reads = [(ITEMS, &level.points), (PATHS, &level.paths)];
-        let dispatch = Dispatch::new(scene, level.count);
+        let dispatch = level.dispatch(scene);
         (passes.first_hits).record(context, encoder, dispatch, &reads, &self.first_hits);
     }
 
@@ -150,29 +151,39 @@ impl AovFilm {
             (POINT_LAYERS, &layers.buffer),
             (ENVIRONMENT, film.environment()),
         ];
-        let dispatch = Dispatch::new(scene, level.count).with_layers(self.layers);
+        let dispatch = level.dispatch(scene).with_layers(self.layers);
         (passes.layers).record(context, encoder, dispatch, &reads, light);
     }
 
-    /// Reads the band's samples back.
-    pub fn develop(&self, context: &GpuContext) -> Result<BandSamples, GpuError> {
-        let encoder = context.device.create_command_encoder(&Default::default());
-        let records: Vec<FirstHitRecord> =
-            read_back(context, encoder, &self.first_hits, self.samples)?;
-        let light = match &self.light {
-            Some((buffer, _)) => {
-                let encoder = context.device.create_command_encoder(&Default::default());
-                let count = self.samples * (self.layers + 1);
-                let sums: Vec<[f32; 4]> = read_back(context, encoder, buffer, count)?;
-                sums.iter()
-                    .map(|&[r, g, b, _]| Vec3::new(r, g, b))
-                    .collect()
-            }
+    /// Adds the band's samples to what its wait brings back.
+    pub fn develop<'f>(&'f self, downloads: &mut Downloads<'f>) -> AovParts {
+        AovParts {
+            first_hits: downloads.add(&self.first_hits, self.samples),
+            light: (self.light.as_ref())
+                .map(|(buffer, _)| downloads.add(buffer, self.samples * (self.layers + 1))),
+        }
+    }
+}
+
+/// Where a band's AOV samples lie in what its wait brings back.
+pub struct AovParts {
+    first_hits: Part<FirstHitRecord>,
+    light: Option<Part<[f32; 4]>>,
+}
+
+impl AovParts {
+    /// The band's samples, from what its wait brought back.
+    pub fn samples(self, downloaded: &Downloaded) -> BandSamples {
+        let records = downloaded.take(self.first_hits);
+        let light = match self.light {
+            Some(part) => (downloaded.take(part).iter())
+                .map(|&[r, g, b, _]| Vec3::new(r, g, b))
+                .collect(),
             None => Vec::new(),
         };
-        Ok(BandSamples {
+        BandSamples {
             first_hits: records.iter().map(FirstHit::from).collect(),
             light,
-        })
+        }
     }
 }

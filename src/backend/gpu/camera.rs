@@ -102,6 +102,6 @@ impl CameraPass {
             &reads,
             &paths,
         );
-        LevelBuffers::with_paths(context, paths, count)
+        LevelBuffers::with_paths(context, paths, count, None)
     }
 }

@@ -119,8 +119,14 @@ contract! {
     BLOCK_OFFSETS: u32 = 21;
     /// The frame's background and ambient sky (`environment.wgsl`).
     ENVIRONMENT: u32 = 22;
+    /// The next level's length, which the compaction writes.
+    LEVEL_LENGTH: u32 = 23;
+    /// Words of a level's length (`scan_sums.wgsl`): its item count,
+    /// which goes into each of its passes' parameters, then the
+    /// workgroups in x, y and z, wgpu's indirect dispatch arguments.
+    LEVEL_LENGTH_WORDS: u32 = 4;
 
-    // The film's counters (`accumulate.wgsl`).
+    // The film's counters (`accumulate.wgsl`, `scan_sums.wgsl`).
     /// Shading points.
     COUNTER_SHADING_POINTS: u32 = 0;
     /// Segments of no light's class.
@@ -130,8 +136,11 @@ contract! {
     COUNTER_CLASS_RAYS: u32 = 2;
     /// The plan's classes of lights, which rays are counted under.
     SHADOW_CLASSES: u32 = Shadows::ALL.len() as u32;
+    /// The rays of the levels after the camera's, which the compaction
+    /// counts as it makes them (`scan_sums.wgsl`).
+    COUNTER_SECONDARY_RAYS: u32 = COUNTER_CLASS_RAYS + SHADOW_CLASSES;
     /// Words of the film's counters.
-    FILM_COUNTERS: u32 = COUNTER_CLASS_RAYS + SHADOW_CLASSES;
+    FILM_COUNTERS: u32 = COUNTER_SECONDARY_RAYS + 1;
 
     // Formula (2)'s counters (`light_mesh.wgsl`): 64-bit counts, count i
     // in words 2i (low) and 2i + 1 (high), then one word.

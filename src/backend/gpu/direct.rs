@@ -20,7 +20,7 @@ use super::contract::{
     CLASS_SHIFT, ITEMS, LIGHTS, SHADED_BY_FORMULA_ONE, SHADED_BY_LIGHT_MESH, TESTS_SEGMENT,
 };
 use super::layered::{LayeredPass, PointLayers};
-use super::pass::{Dispatch, WorldUse, BATCH};
+use super::pass::{WorldUse, BATCH};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::surface::{LevelBuffers, SurfacePoint};
@@ -210,11 +210,10 @@ impl DirectLightPass {
         layers: Option<&PointLayers>,
     ) {
         let reads = [(ITEMS, &level.points), (LIGHTS, &lights.buffer)];
-        let count = level.count;
         (self.pass).record(
             context,
             encoder,
-            Dispatch::new(scene, count).with_lights(lights.count),
+            level.dispatch(scene).with_lights(lights.count),
             &reads,
             direct,
             layers,
@@ -235,6 +234,7 @@ impl DirectLightPass {
         for batch in points.chunks(BATCH) {
             let items: Vec<SurfacePoint> = batch.par_iter().map(SurfacePoint::from).collect();
             let answers: Vec<DirectLight> = self.pass.plain().run(
+                "formula (1) at points the CPU made",
                 context,
                 scene,
                 &items,

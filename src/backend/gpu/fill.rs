@@ -73,6 +73,7 @@ impl FillPass {
         for batch in segments.chunks(BATCH) {
             let items: Vec<FillSegment> = batch.iter().map(FillSegment::from).collect();
             let bits: Vec<u32> = self.pass.run(
+                "the fill's segments traced, which the CPU merges into its masks",
                 context,
                 scene,
                 &items,

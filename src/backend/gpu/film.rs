@@ -2,17 +2,19 @@
 //! send to their pixel samples (`accumulate.wgsl`), in point order, and
 //! the samples resolve into pixels (`resolve.wgsl`), as the CPU's
 //! `Environment::shaded_value` and `resolve` do, with the frame's
-//! background and ambient sky; only the pixels and two counters come back.
+//! background and ambient sky; only the pixels and the band's counters
+//! come back, with whatever else the band's one wait brings.
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
 
 use super::context::{GpuContext, GpuError};
 use super::contract::{
-    COUNTERS, COUNTER_CLASS_RAYS, COUNTER_OTHER_RAYS, COUNTER_SHADING_POINTS, DIRECT, ENVIRONMENT,
-    FILM_COUNTERS, ITEMS,
+    COUNTERS, COUNTER_CLASS_RAYS, COUNTER_OTHER_RAYS, COUNTER_SECONDARY_RAYS,
+    COUNTER_SHADING_POINTS, DIRECT, ENVIRONMENT, FILM_COUNTERS, ITEMS,
 };
-use super::pass::{answer_buffer, read_back, Dispatch, WorldPass, WorldUse};
+use super::pass::{answer_buffer, Dispatch, WorldPass, WorldUse};
+use super::recording::{Downloaded, Downloads, Part};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::surface::LevelBuffers;
@@ -62,12 +64,22 @@ impl FilmPasses {
     }
 }
 
-/// One band's samples and counters, and the frame's environment.
+/// The film's counters, as the shaders add them up.
+type Counters = [u32; FILM_COUNTERS as usize];
+
+/// One band's samples, pixels and counters, and the frame's environment.
 pub struct Film {
     samples: wgpu::Buffer,
+    pixels: wgpu::Buffer,
     counters: wgpu::Buffer,
     environment: wgpu::Buffer,
-    pixels: usize,
+    pixel_count: usize,
+}
+
+/// Where a band's pixels and counters lie in what its wait brings back.
+pub struct FilmParts {
+    pixels: Part<[f32; 4]>,
+    counters: Part<Counters>,
 }
 
 /// What a band's film gives back.
@@ -77,6 +89,8 @@ pub struct Developed {
     /// Segments of no light's class (LMM's point-to-node tests, the
     /// blockers' rays).
     pub other_rays: u64,
+    /// The rays of the levels after the camera's.
+    pub secondary_rays: u64,
     /// Formula (1)'s shadow rays and lamp samples by class.
     pub class_rays: ClassRays,
 }
@@ -93,10 +107,16 @@ impl Film {
         let environment = EnvironmentRecord::from(environment);
         Ok(Film {
             samples: answer_buffer::<[f32; 4]>(context, "pixel samples", pixels * spp)?,
-            counters: answer_buffer::<[u32; FILM_COUNTERS as usize]>(context, "counters", 1)?,
+            pixels: answer_buffer::<[f32; 4]>(context, "pixels", pixels)?,
+            counters: answer_buffer::<Counters>(context, "counters", 1)?,
             environment: storage(context, "environment", &[environment])?,
-            pixels,
+            pixel_count: pixels,
         })
+    }
+
+    /// The band's counters, which the passes add to.
+    pub fn counters(&self) -> &wgpu::Buffer {
+        &self.counters
     }
 
     /// The frame's background and ambient sky, as uploaded.
@@ -120,47 +140,50 @@ impl Film {
             (ENVIRONMENT, &self.environment),
             (COUNTERS, &self.counters),
         ];
-        let count = level.count;
         (passes.accumulate).record(
             context,
             encoder,
-            Dispatch::new(scene, count),
+            level.dispatch(scene),
             &reads,
             &self.samples,
         );
     }
 
-    /// Resolves the samples into pixels and reads them back.
-    pub fn develop(
-        &self,
+    /// Records the samples' resolving into pixels, and adds the pixels
+    /// and the counters to what the band's wait brings back.
+    pub fn develop<'f>(
+        &'f self,
         passes: &FilmPasses,
         context: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
         scene: &GpuScene,
-    ) -> Result<Developed, GpuError> {
-        let pixels = answer_buffer::<[f32; 4]>(context, "pixels", self.pixels)?;
-        let mut encoder = context.device.create_command_encoder(&Default::default());
+        downloads: &mut Downloads<'f>,
+    ) -> FilmParts {
         let reads = [(ITEMS, &self.samples), (ENVIRONMENT, &self.environment)];
-        let count = self.pixels;
-        (passes.resolve).record(
-            context,
-            &mut encoder,
-            Dispatch::new(scene, count),
-            &reads,
-            &pixels,
-        );
-        let pixels: Vec<[f32; 4]> = read_back(context, encoder, &pixels, count)?;
-        let encoder = context.device.create_command_encoder(&Default::default());
-        let [counters]: [[u32; FILM_COUNTERS as usize]; 1] =
-            read_back(context, encoder, &self.counters, 1)?
-                .try_into()
-                .map_err(|_| GpuError::Readback("no counters".into()))?;
-        Ok(Developed {
+        let count = self.pixel_count;
+        let dispatch = Dispatch::new(scene, count);
+        (passes.resolve).record(context, encoder, dispatch, &reads, &self.pixels);
+        FilmParts {
+            pixels: downloads.add(&self.pixels, count),
+            counters: downloads.add(&self.counters, 1),
+        }
+    }
+}
+
+impl FilmParts {
+    /// The band's pixels and counts, from what its wait brought back.
+    pub fn developed(self, downloaded: &Downloaded) -> Developed {
+        let pixels = downloaded.take(self.pixels);
+        let counters = (downloaded.take(self.counters).first().copied()).unwrap_or_default();
+        let count = |at: u32| counters[at as usize] as u64;
+        Developed {
             pixels: pixels.into_iter().map(Vec4::from_array).collect(),
-            shading_points: counters[COUNTER_SHADING_POINTS as usize] as u64,
-            other_rays: counters[COUNTER_OTHER_RAYS as usize] as u64,
+            shading_points: count(COUNTER_SHADING_POINTS),
+            other_rays: count(COUNTER_OTHER_RAYS),
+            secondary_rays: count(COUNTER_SECONDARY_RAYS),
             class_rays: ClassRays::new(std::array::from_fn(|class| {
-                counters[COUNTER_CLASS_RAYS as usize + class] as u64
+                count(COUNTER_CLASS_RAYS + class as u32)
             })),
-        })
+        }
     }
 }

@@ -1,11 +1,16 @@
-//! One frame on the GPU, band by band. Each level of the band's camera
-//! paths is one submission: level 0's rays made by the camera pass, then
-//! closest hits, shading points, their direct light (formula (1) on the
-//! GPU for `whitted`; lamp samples made on the CPU for `area`, their
-//! segments tested on the GPU), the film's accumulation, and the next
-//! level's rays with their compaction, of which only the length comes
-//! back. The band's pixels come back once, resolved; with `--aovs`, the
-//! AOV film's samples beside them ([`AovFilm`]).
+//! One frame on the GPU, band by band, each band one [`Recording`]. Each
+//! level of the band's camera paths is recorded and submitted without a
+//! wait: level 0's rays made by the camera pass, then closest hits,
+//! shading points, their direct light (formula (1) on the GPU for
+//! `whitted`; lamp samples made on the CPU for `area`, their segments
+//! tested on the GPU; formula (2) for the light mesh), the film's
+//! accumulation, and the next level's rays with their compaction, whose
+//! length stays on the GPU ([`super::scatter`]). The band waits once at
+//! its end, for its resolved pixels, its counters (the secondary rays
+//! among them), formula (2)'s counters and, with `--aovs`, the AOV
+//! film's samples ([`AovFilm`]). The waits within a level are where the
+//! CPU takes part: `area`'s lamp samples and the light mesh's demand
+//! ([`LightMeshShading::prepare`]).
 
 use std::ops::Range;
 use std::time::Instant;
@@ -20,8 +25,9 @@ use super::direct::{DirectLight, FrameLights};
 use super::film::Film;
 use super::layered::PointLayers;
 use super::light_mesh::LightMeshShading;
-use super::pass::{answer_buffer, read_back, BATCH};
+use super::pass::{answer_buffer, BATCH};
 use super::pipelines::Pipelines;
+use super::recording::{Downloads, Recording};
 use super::scatter::batches;
 use super::scene::{storage, GpuScene};
 use super::surface::{FrameSurfaces, LevelBuffers, PathRay, SceneSurfaces, SurfacePoint};
@@ -56,12 +62,21 @@ pub struct Frame<'a> {
     pub scene_surfaces: &'a SceneSurfaces,
     pub frame_surfaces: &'a FrameSurfaces,
     pub lights: FrameLights,
+    /// The most secondary rays a point spawns, over the frame's materials
+    /// and the default one (`most_secondary_rays`): it bounds each next
+    /// level's length.
+    pub rays_per_point: usize,
 }
 
 impl Frame<'_> {
     /// The pixels of `rows`, and their samples for the layers of `aovs`
     /// where the frame has AOVs; ray, point and segment counts and stage
-    /// times go to `stats`.
+    /// times go to `stats`. The band is one recording: each level's passes
+    /// are recorded and submitted without waiting, and the band waits
+    /// once, at its end, for everything it gives back (a level waits
+    /// earlier only where the CPU takes part in it: `area`'s lamp
+    /// samples, the light mesh's demand, a next level's length that may
+    /// be more than a batch).
     pub fn render_band(
         &self,
         rows: Range<u32>,
@@ -81,80 +96,111 @@ impl Frame<'_> {
                 None => None,
             };
             let films = (&film, aov_film.as_ref());
+            let mut recording = Recording::new(context);
 
             let start = Instant::now();
             let mut level = Vec::new();
             for batch in batches(band_samples) {
-                let count = batch.len();
                 let camera = CameraRecord::new(job, rows.start, batch.start as u32);
-                let mut encoder = context.device.create_command_encoder(&Default::default());
                 let camera_rays = (self.pipelines.camera).rays(
                     context,
-                    &mut encoder,
+                    recording.encoder(),
                     self.scene,
                     &camera,
-                    count,
+                    batch.len(),
                 )?;
-                let mut encoder =
-                    self.shade(encoder, &camera_rays, films, method, band_start, stats)?;
+                self.shade(
+                    &mut recording,
+                    &camera_rays,
+                    films,
+                    method,
+                    band_start,
+                    stats,
+                )?;
                 if let Some(aov_film) = &aov_film {
                     let passes = &self.pipelines.aovs;
-                    aov_film.record_first_hits(
-                        passes,
-                        context,
-                        &mut encoder,
-                        self.scene,
-                        &camera_rays,
-                    );
+                    let encoder = recording.encoder();
+                    aov_film.record_first_hits(passes, context, encoder, self.scene, &camera_rays);
                 }
-                level.extend(self.continue_paths(encoder, &camera_rays, 0)?);
+                level.extend(self.continue_paths(&mut recording, &camera_rays, &film, 0)?);
+                recording.submit();
             }
             stats.rays.primary += band_samples as u64;
             stats.add_stage_time("primary", start.elapsed().as_secs_f64());
 
             let start = Instant::now();
             for depth in 1..=job.max_depth {
-                stats.rays.secondary += level.iter().map(|l| l.count as u64).sum::<u64>();
                 let mut next = Vec::new();
                 for paths in &level {
-                    let encoder = context.device.create_command_encoder(&Default::default());
-                    let encoder = self.shade(encoder, paths, films, method, band_start, stats)?;
-                    next.extend(self.continue_paths(encoder, paths, depth)?);
+                    self.shade(&mut recording, paths, films, method, band_start, stats)?;
+                    next.extend(self.continue_paths(&mut recording, paths, &film, depth)?);
+                    recording.submit();
                 }
                 level = next;
             }
             stats.add_stage_time("secondary", start.elapsed().as_secs_f64());
 
             let start = Instant::now();
-            let developed = film.develop(&self.pipelines.film, context, self.scene)?;
-            stats.rays.shadow += developed.other_rays + developed.class_rays.total();
-            stats.shadow_classes.add_rays(developed.class_rays);
-            stats.shading_points += developed.shading_points;
-            let samples = match &aov_film {
-                Some(aov_film) => Some(aov_film.develop(context)?),
-                None => None,
-            };
+            let developed = self.develop(recording, films, method, stats)?;
             stats.add_stage_time("resolve", start.elapsed().as_secs_f64());
-            Ok((developed.pixels, samples))
+            Ok(developed)
         })
+    }
+
+    /// Records the band's resolve and waits for it, the band's one wait:
+    /// its pixels, the film's counters (the secondary rays among them,
+    /// which go to `stats` with the shading points and shadow rays), the
+    /// AOV samples and formula (2)'s counters come back in one map.
+    fn develop(
+        &self,
+        mut recording: Recording,
+        (film, aov_film): (&Film, Option<&AovFilm>),
+        method: &mut DirectMethod,
+        stats: &mut FrameStats,
+    ) -> Result<(Vec<Vec4>, Option<BandSamples>), GpuError> {
+        let mut downloads = Downloads::default();
+        let film_parts = film.develop(
+            &self.pipelines.film,
+            self.context,
+            recording.encoder(),
+            self.scene,
+            &mut downloads,
+        );
+        let aov_parts = aov_film.map(|aov_film| aov_film.develop(&mut downloads));
+        let counts = match &*method {
+            DirectMethod::LightMesh(light_mesh) => Some(light_mesh.download(&mut downloads)),
+            DirectMethod::Whitted | DirectMethod::Area => None,
+        };
+        let why = "the band's pixels and counters (and AOV samples, formula (2)'s counters)";
+        let downloaded = recording.wait(why, downloads)?;
+        let developed = film_parts.developed(&downloaded);
+        if let (DirectMethod::LightMesh(light_mesh), Some(counts)) = (method, counts) {
+            light_mesh.counted(&downloaded, counts);
+        }
+        stats.rays.secondary += developed.secondary_rays;
+        stats.rays.shadow += developed.other_rays + developed.class_rays.total();
+        stats.shadow_classes.add_rays(developed.class_rays);
+        stats.shading_points += developed.shading_points;
+        let samples = aov_parts.map(|parts| parts.samples(&downloaded));
+        Ok((developed.pixels, samples))
     }
 
     /// Records a level's closest hits, shading points, direct light and
     /// accumulation into the film (and the AOV film's light layers, where
-    /// it has them); for `area` and the light mesh, submits halfway to
+    /// it has them); for `area` and the light mesh, waits halfway to
     /// bring points to the CPU (lamp samples; demand and fill for the
-    /// points the mask pool does not serve). The encoder to go on with.
+    /// points the mask pool does not serve).
     fn shade(
         &self,
-        mut encoder: wgpu::CommandEncoder,
+        recording: &mut Recording,
         level: &LevelBuffers,
         (film, aov_film): (&Film, Option<&AovFilm>),
         method: &mut DirectMethod,
         band_start: u64,
         stats: &mut FrameStats,
-    ) -> Result<wgpu::CommandEncoder, RenderError> {
+    ) -> Result<(), RenderError> {
         let (context, pipelines, scene) = (self.context, self.pipelines, self.scene);
-        self.record_points(&mut encoder, level);
+        self.record_points(recording.encoder(), level);
         let mut layers = match (aov_film, &method) {
             (Some(aov_film), DirectMethod::Whitted | DirectMethod::LightMesh(_)) => {
                 aov_film.point_layers(context, level.count)?
@@ -166,7 +212,7 @@ impl Frame<'_> {
                 let direct = answer_buffer::<DirectLight>(context, "direct light", level.count)?;
                 (pipelines.direct).record(
                     context,
-                    &mut encoder,
+                    recording.encoder(),
                     scene,
                     &self.lights,
                     level,
@@ -176,8 +222,7 @@ impl Frame<'_> {
                 direct
             }
             DirectMethod::Area => {
-                let points = read_back(context, encoder, &level.points, level.count)?;
-                encoder = context.device.create_command_encoder(&Default::default());
+                let points = level_points(recording, level)?;
                 let layer_of = aov_film.and_then(AovFilm::layer_of);
                 let (direct, sums) = self.area_light(&points, band_start, layer_of)?;
                 if let (Some(sums), Some((_, count))) = (sums, layer_of) {
@@ -186,7 +231,7 @@ impl Frame<'_> {
                 storage(context, "direct light", &direct)?
             }
             DirectMethod::LightMesh(light_mesh) => {
-                let (reach, next) = light_mesh.prepare(
+                let reach = light_mesh.prepare(
                     &pipelines.light_mesh,
                     &pipelines.fill,
                     context,
@@ -194,15 +239,14 @@ impl Frame<'_> {
                     scene,
                     &self.lights,
                     level,
-                    encoder,
+                    recording,
                     stats,
                 )?;
-                encoder = next;
                 let direct = answer_buffer::<DirectLight>(context, "direct light", level.count)?;
                 light_mesh.record(
                     &pipelines.light_mesh,
                     context,
-                    &mut encoder,
+                    recording.encoder(),
                     scene,
                     &self.lights,
                     level,
@@ -212,19 +256,13 @@ impl Frame<'_> {
                 direct
             }
         };
-        film.accumulate(
-            &pipelines.film,
-            context,
-            &mut encoder,
-            scene,
-            level,
-            &direct,
-        );
+        let encoder = recording.encoder();
+        film.accumulate(&pipelines.film, context, encoder, scene, level, &direct);
         if let (Some(aov_film), Some(layers)) = (aov_film, &layers) {
             let passes = &pipelines.aovs;
-            aov_film.accumulate(passes, context, &mut encoder, scene, film, level, layers);
+            aov_film.accumulate(passes, context, encoder, scene, film, level, layers);
         }
-        Ok(encoder)
+        Ok(())
     }
 
     /// Records the closest hits of `level`'s rays and the shading points
@@ -236,19 +274,27 @@ impl Frame<'_> {
         (pipelines.surfaces).record(context, encoder, scene, surfaces.0, surfaces.1, level);
     }
 
-    /// The next level of the recursion from `level` at `depth` (none at
-    /// the deepest), submitting `encoder` either way.
+    /// Records the next level of the recursion from `level` at `depth`
+    /// (none at the deepest, or where the frame's materials spawn no
+    /// rays), its length added to `film`'s counters.
     fn continue_paths(
         &self,
-        encoder: wgpu::CommandEncoder,
+        recording: &mut Recording,
         level: &LevelBuffers,
+        film: &Film,
         depth: u32,
     ) -> Result<Vec<LevelBuffers>, GpuError> {
         if depth >= self.job.max_depth {
-            self.context.queue.submit([encoder.finish()]);
             return Ok(Vec::new());
         }
-        (self.pipelines.scatter).next_level(self.context, encoder, self.scene, level)
+        (self.pipelines.scatter).next_level(
+            self.context,
+            recording,
+            self.scene,
+            level,
+            self.rays_per_point,
+            film.counters(),
+        )
     }
 
     /// The shading points of `rays`' closest hits (None for a miss).
@@ -259,9 +305,9 @@ impl Frame<'_> {
             let paths: Vec<PathRay> = batch.iter().map(PathRay::from).collect();
             let records: Vec<SurfacePoint> = context.checked("making shading points", || {
                 let level = LevelBuffers::new(context, &paths)?;
-                let mut encoder = context.device.create_command_encoder(&Default::default());
-                self.record_points(&mut encoder, &level);
-                read_back(context, encoder, &level.points, level.count)
+                let mut recording = Recording::new(context);
+                self.record_points(recording.encoder(), &level);
+                recording.read_back("the rays' shading points", &level.points, level.count)
             })?;
             points.extend(records.iter().map(SurfacePoint::shading_point));
         }
@@ -332,6 +378,28 @@ impl Frame<'_> {
         }
         Ok((direct, layers))
     }
+}
+
+/// `level`'s shading points, as many as it holds (a level counted on the
+/// GPU comes back with its length), for `--method area`'s lamp samples.
+fn level_points(
+    recording: &mut Recording,
+    level: &LevelBuffers,
+) -> Result<Vec<SurfacePoint>, GpuError> {
+    let mut downloads = Downloads::default();
+    let length = (level.length.as_ref()).map(|length| downloads.add::<u32>(length, 1));
+    let points = downloads.add::<SurfacePoint>(&level.points, level.count);
+    let why = "the level's points, for the CPU's lamp samples";
+    let downloaded = recording.wait(why, downloads)?;
+    let mut points = downloaded.take(points);
+    if let Some(length) = length {
+        let count = downloaded
+            .take(length)
+            .first()
+            .map_or(0, |&count| count as usize);
+        points.truncate(count);
+    }
+    Ok(points)
 }
 
 /// Per point, its visible terms summed per light layer, as

@@ -29,7 +29,8 @@ use super::direct::FrameLights;
 use super::fill::FillPass;
 use super::layered::{LayeredPass, PointLayers};
 use super::mask_pool::MaskPool;
-use super::pass::{answer_buffer, read_back, Dispatch, WorldPass, WorldUse};
+use super::pass::{answer_buffer, Dispatch, WorldPass, WorldUse};
+use super::recording::{Downloaded, Downloads, Part, Recording};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::surface::{LevelBuffers, SurfacePoint};
@@ -95,8 +96,11 @@ pub struct LightMeshShading<'m> {
     /// What demand, fill and enclosure did.
     work: LightMeshStats,
     /// The shader's counters ([`PointCounts`] as (low, high) pairs, then
-    /// the points whose loops the adapter cut short).
+    /// the points whose loops the adapter cut short), added up over the
+    /// frame.
     counts: wgpu::Buffer,
+    /// The counters as the last band's wait brought them back.
+    counted: Counters,
 }
 
 /// The reaching lights of a level's points, as the coverage pass made
@@ -121,15 +125,17 @@ impl<'m> LightMeshShading<'m> {
             lanes: (job.shadows).lanes(method, lights, |role| role == LightRole::LightMesh),
             work: LightMeshStats::default(),
             counts: answer_buffer::<Counters>(context, "light-mesh counters", 1)?,
+            counted: [0; LIGHT_MESH_COUNTERS as usize],
         })
     }
 
     /// Makes every mask bit `level`'s points need valid in the light mesh
     /// and resident in the pool: the coverage pass finds the points the
     /// pool does not serve yet, and only those come back for the CPU's
-    /// demand, fill and enclosure stages (as the CPU backend runs them);
-    /// `encoder` (holding the level's points) is submitted on the way.
-    /// Returns the points' reaching lights and the encoder to go on with.
+    /// demand, fill and enclosure stages (as the CPU backend runs them):
+    /// the level waits for its coverage flags, and where some points are
+    /// not served, for those points and the fill's segments. Returns the
+    /// points' reaching lights.
     #[allow(clippy::too_many_arguments)]
     pub fn prepare(
         &mut self,
@@ -140,9 +146,9 @@ impl<'m> LightMeshShading<'m> {
         scene: &GpuScene,
         lights: &FrameLights,
         level: &LevelBuffers,
-        mut encoder: wgpu::CommandEncoder,
+        recording: &mut Recording,
         stats: &mut FrameStats,
-    ) -> Result<(LevelReach, wgpu::CommandEncoder), RenderError> {
+    ) -> Result<LevelReach, RenderError> {
         let start = Instant::now();
         let p2n = self.point_to_node_tests;
         self.work.bricks_uploaded += self.pool.refresh(context, self.mesh, p2n)?;
@@ -161,9 +167,10 @@ impl<'m> LightMeshShading<'m> {
             (POOL, slots),
             (FLAGS, &flags),
         ];
-        let dispatch = Dispatch::new(scene, level.count).with_lights(lights.count());
-        (passes.coverage).record(context, &mut encoder, dispatch, &reads, &reach);
-        let flags: Vec<u32> = read_back(context, encoder, &flags, flag_words)?;
+        let dispatch = level.dispatch(scene).with_lights(lights.count());
+        (passes.coverage).record(context, recording.encoder(), dispatch, &reads, &reach);
+        let why = "the points' coverage flags: which points the CPU's demand takes";
+        let flags: Vec<u32> = recording.read_back(why, &flags, flag_words)?;
         let (unserved, read_slots) = flags.split_at(point_words);
         let unserved: Vec<u32> = (unserved.iter().enumerate())
             .flat_map(|(word, &bits)| {
@@ -172,7 +179,7 @@ impl<'m> LightMeshShading<'m> {
             .collect();
         stats.add_stage_time("coverage", start.elapsed().as_secs_f64());
 
-        let records = self.gather(passes, context, scene, level, &unserved)?;
+        let records = self.gather(passes, context, recording, scene, level, &unserved)?;
         let points: Vec<ShadingPoint> = records
             .iter()
             .filter_map(SurfacePoint::shading_point)
@@ -204,8 +211,7 @@ impl<'m> LightMeshShading<'m> {
         self.work.bricks_uploaded += upload.bricks;
         self.work.bricks_evicted += upload.evicted;
         stats.add_stage_time("upload", start.elapsed().as_secs_f64());
-        let encoder = context.device.create_command_encoder(&Default::default());
-        Ok((LevelReach { reach }, encoder))
+        Ok(LevelReach { reach })
     }
 
     /// The points of `level` at `indices`, read back.
@@ -213,6 +219,7 @@ impl<'m> LightMeshShading<'m> {
         &self,
         passes: &LightMeshPasses,
         context: &GpuContext,
+        recording: &mut Recording,
         scene: &GpuScene,
         level: &LevelBuffers,
         indices: &[u32],
@@ -222,16 +229,11 @@ impl<'m> LightMeshShading<'m> {
         }
         let indices_buffer = storage(context, "unserved points", indices)?;
         let gathered = answer_buffer::<SurfacePoint>(context, "gathered points", indices.len())?;
-        let mut encoder = context.device.create_command_encoder(&Default::default());
         let reads = [(ITEMS, &indices_buffer), (GATHER_SOURCE, &level.points)];
-        (passes.gather).record(
-            context,
-            &mut encoder,
-            Dispatch::new(scene, indices.len()),
-            &reads,
-            &gathered,
-        );
-        Ok(read_back(context, encoder, &gathered, indices.len())?)
+        let dispatch = Dispatch::new(scene, indices.len());
+        (passes.gather).record(context, recording.encoder(), dispatch, &reads, &gathered);
+        let why = "the points the pool does not serve, for the CPU's demand";
+        Ok(recording.read_back(why, &gathered, indices.len())?)
     }
 
     /// Records formula (2) at `level`'s points into `direct` (and their
@@ -258,22 +260,32 @@ impl<'m> LightMeshShading<'m> {
             (POOL, slots),
             (COUNTS, &self.counts),
         ];
-        let dispatch = Dispatch::new(scene, level.count).with_lights(lights.count());
+        let dispatch = level.dispatch(scene).with_lights(lights.count());
         (passes.shade).record(context, encoder, dispatch, &reads, direct, layers);
     }
 
+    /// Adds formula (2)'s counters to what a band's wait brings back.
+    pub fn download<'s>(&'s self, downloads: &mut Downloads<'s>) -> Part<Counters> {
+        downloads.add(&self.counts, 1)
+    }
+
+    /// Keeps the counters a band's wait brought back: the frame's so far.
+    pub fn counted(&mut self, downloaded: &Downloaded, part: Part<Counters>) {
+        if let Some(&counts) = downloaded.take(part).first() {
+            self.counted = counts;
+        }
+    }
+
     /// The frame's light-mesh statistics, once its `shading_points` are
-    /// shaded; the fill's node-to-light segments go to the shadow rays.
+    /// shaded and its last band's counters came back; the fill's
+    /// node-to-light segments go to the shadow rays.
     pub fn finish(
         self,
         context: &GpuContext,
         job: &FrameJob,
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
-        let encoder = context.device.create_command_encoder(&Default::default());
-        let [counts]: [Counters; 1] = read_back(context, encoder, &self.counts, 1)?
-            .try_into()
-            .expect("one counter record was read");
+        let counts = self.counted;
         let points = counts[LOOPS_CUT_SHORT as usize];
         if points > 0 {
             return Err(GpuError::LoopsCutShort {

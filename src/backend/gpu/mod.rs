@@ -37,6 +37,7 @@ mod pass;
 mod pipeline_cache;
 mod pipeline_file;
 mod pipelines;
+mod recording;
 mod scatter;
 pub(crate) mod scene;
 mod shaders;
@@ -59,9 +60,11 @@ use super::{thread_pool, BackendError, RenderError};
 use crate::accel::{Ray, World};
 use crate::lightmesh::LightMesh;
 use crate::output::{Image, RenderedFrame};
+use crate::render::scatter::most_secondary_rays;
 use crate::render::shadow_split::FrameMethod;
 use crate::render::surface::ShadingPoint;
 use crate::render::FrameJob;
+use crate::scene::Material;
 use crate::settings::{Aov, LightMeshSettings};
 use crate::stats::FrameStats;
 use fill::FillPass;
@@ -244,6 +247,9 @@ impl GpuBackend {
             scene_surfaces,
             frame_surfaces,
             lights,
+            rays_per_point: most_secondary_rays(
+                (job.frame.materials.iter()).chain([&Material::default()]),
+            ),
         }
     }
 

@@ -1,10 +1,11 @@
 //! One compute pass, end to end: its pipeline and bind group layout, its
-//! dispatch recorded into a command encoder (one invocation per item), and
-//! the answers read back. A pass reads its items (binding [`ITEMS`]),
-//! optionally the uploaded world's arrays, and further read-only arrays,
-//! and writes one answer per item (binding [`ANSWERS`]). Passes that feed each other are
-//! recorded into one encoder and their intermediate answers never leave
-//! the GPU; [`WorldPass::run`] is the round trip for a single pass.
+//! dispatch recorded into a command encoder (one invocation per item,
+//! counted on the CPU or, for a level the compaction made, on the GPU),
+//! and [`WorldPass::run`], the round trip for a single pass. A pass reads
+//! its items (binding [`ITEMS`]), optionally the uploaded world's arrays,
+//! and further read-only arrays, and writes one answer per item (binding
+//! [`ANSWERS`]). Passes that feed each other are recorded into one
+//! encoder and their intermediate answers never leave the GPU.
 
 use std::sync::OnceLock;
 
@@ -12,6 +13,7 @@ use bytemuck::Pod;
 
 use super::context::{GpuContext, GpuError};
 use super::contract::{ANSWERS, ITEMS, PARAMS, WORKGROUP};
+use super::recording::Recording;
 use super::scene::GpuScene;
 use super::shaders::{self, Arithmetic, Entry};
 use super::spirv;
@@ -85,6 +87,11 @@ pub enum WorldUse {
 pub struct Dispatch<'a> {
     scene: &'a GpuScene,
     items: usize,
+    /// Where the GPU wrote the item count, at most `items`, and the
+    /// workgroups for it
+    /// ([`super::contract::LEVEL_LENGTH_WORDS`] words), for a level the CPU has not
+    /// counted.
+    length: Option<&'a wgpu::Buffer>,
     lights: u32,
     layers: u32,
 }
@@ -94,8 +101,21 @@ impl<'a> Dispatch<'a> {
         Dispatch {
             scene,
             items,
+            length: None,
             lights: 0,
             layers: 0,
+        }
+    }
+
+    /// Over at most `bound` items, as many as the GPU wrote into `length`.
+    pub fn counted_on_gpu(
+        scene: &'a GpuScene,
+        bound: usize,
+        length: &'a wgpu::Buffer,
+    ) -> Dispatch<'a> {
+        Dispatch {
+            length: Some(length),
+            ..Dispatch::new(scene, bound)
         }
     }
 
@@ -285,7 +305,9 @@ impl WorldPass {
 
     /// Records the pass into `encoder` as `dispatch` says, with `reads`
     /// bound (the items at [`ITEMS`] among them, and any further writable
-    /// arrays) and the answers written to `answers`.
+    /// arrays) and the answers written to `answers`. Where the GPU counts
+    /// the items, a copy puts its count into the parameters and the
+    /// dispatch takes its workgroups from the same words.
     pub fn record(
         &self,
         context: &GpuContext,
@@ -297,6 +319,7 @@ impl WorldPass {
         let Dispatch {
             scene,
             items: count,
+            length,
             lights,
             layers,
         } = dispatch;
@@ -306,8 +329,11 @@ impl WorldPass {
         let params = context.upload(
             "pass params",
             bytemuck::bytes_of(&params),
-            wgpu::BufferUsages::STORAGE,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         );
+        if let Some(length) = length {
+            encoder.copy_buffer_to_buffer(length, 0, &params, 0, size_of::<u32>() as u64);
+        }
         let world = match self.world {
             WorldUse::Traces => scene.buffers().to_vec(),
             WorldUse::None => Vec::new(),
@@ -330,14 +356,19 @@ impl WorldPass {
         let mut pass = encoder.begin_compute_pass(&Default::default());
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups((count as u32).div_ceil(WORKGROUP), 1, 1);
+        match length {
+            Some(length) => pass.dispatch_workgroups_indirect(length, size_of::<u32>() as u64),
+            None => pass.dispatch_workgroups((count as u32).div_ceil(WORKGROUP), 1, 1),
+        }
     }
 
     /// Runs the pass over `items` (at most [`BATCH`]) with `inputs` bound
-    /// as [`WorldPass::new`] declared them, `light_count` lights; one
-    /// `Answer` per item.
+    /// as [`WorldPass::new`] declared them, `light_count` lights, and
+    /// waits for its answers, one `Answer` per item, which the CPU needs
+    /// for what `why` says.
     pub fn run<Item: Pod, Answer: Pod>(
         &self,
+        why: &'static str,
         context: &GpuContext,
         scene: &GpuScene,
         items: &[Item],
@@ -347,21 +378,22 @@ impl WorldPass {
         context.checked(self.entry.name(), || {
             let items_buffer = super::scene::storage(context, "pass items", items)?;
             let answers = answer_buffer::<Answer>(context, "pass answers", items.len())?;
-            let mut encoder = context.device.create_command_encoder(&Default::default());
+            let mut recording = Recording::new(context);
             let reads: Vec<Bound> = [(ITEMS, &items_buffer)]
                 .into_iter()
                 .chain(inputs.iter().copied())
                 .collect();
             let dispatch = Dispatch::new(scene, items.len()).with_lights(light_count);
-            self.record(context, &mut encoder, dispatch, &reads, &answers);
-            read_back(context, encoder, &answers, items.len())
+            self.record(context, recording.encoder(), dispatch, &reads, &answers);
+            recording.read_back(why, &answers, items.len())
         })
     }
 }
 
 /// A storage buffer for `count` answers of type `Answer` (one at least:
 /// a binding cannot be empty, zeroed as wgpu zeroes every buffer), which
-/// a later pass may read, a copy may fill and [`read_back`] may copy out.
+/// a later pass may read, a copy may fill and a [`Recording`] may copy
+/// out.
 pub fn answer_buffer<Answer: Pod>(
     context: &GpuContext,
     what: &'static str,
@@ -377,42 +409,4 @@ pub fn answer_buffer<Answer: Pod>(
             | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     }))
-}
-
-/// Submits `encoder` with a copy of `buffer`'s first `count` items added,
-/// waits, and returns them.
-pub fn read_back<Out: Pod>(
-    context: &GpuContext,
-    mut encoder: wgpu::CommandEncoder,
-    buffer: &wgpu::Buffer,
-    count: usize,
-) -> Result<Vec<Out>, GpuError> {
-    let bytes = (count.max(1) * size_of::<Out>()) as u64;
-    let staging = context.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("readback"),
-        size: bytes,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
-    context.traffic.waited(bytes);
-    context.queue.submit([encoder.finish()]);
-    let slice = staging.slice(..);
-    let (sender, receiver) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |result| {
-        let _ = sender.send(result);
-    });
-    context
-        .device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|error| GpuError::Readback(error.to_string()))?;
-    receiver
-        .recv()
-        .map_err(|error| GpuError::Readback(error.to_string()))?
-        .map_err(|error| GpuError::Readback(error.to_string()))?;
-    let view = slice
-        .get_mapped_range()
-        .map_err(|error| GpuError::Readback(error.to_string()))?;
-    let items: &[Out] = bytemuck::cast_slice(&view);
-    Ok(items[..count].to_vec())
 }

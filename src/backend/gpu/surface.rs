@@ -433,7 +433,7 @@ impl SurfacePass {
         self.pass.record(
             context,
             encoder,
-            Dispatch::new(world, level.count),
+            level.dispatch(world),
             &reads,
             &level.points,
         );
@@ -441,9 +441,12 @@ impl SurfacePass {
 }
 
 /// One batch of path rays on the GPU and what the passes make of them:
-/// closest hits, shading points, and their direct light.
+/// closest hits, shading points, and their direct light. Its buffers hold
+/// `count` items; a level the compaction made holds as many as the GPU
+/// wrote into `length`, which the CPU does not read.
 pub struct LevelBuffers {
     pub count: usize,
+    pub length: Option<wgpu::Buffer>,
     pub paths: wgpu::Buffer,
     pub hits: wgpu::Buffer,
     pub points: wgpu::Buffer,
@@ -453,20 +456,31 @@ impl LevelBuffers {
     /// Buffers for `paths`, uploaded.
     pub fn new(context: &GpuContext, paths: &[PathRay]) -> Result<LevelBuffers, GpuError> {
         let uploaded = storage(context, "path rays", paths)?;
-        LevelBuffers::with_paths(context, uploaded, paths.len())
+        LevelBuffers::with_paths(context, uploaded, paths.len(), None)
     }
 
-    /// Buffers for `count` path rays already in `paths` on the GPU.
+    /// Buffers for `count` path rays already in `paths` on the GPU, or
+    /// for as many of them as `length` says where the GPU counted them.
     pub fn with_paths(
         context: &GpuContext,
         paths: wgpu::Buffer,
         count: usize,
+        length: Option<wgpu::Buffer>,
     ) -> Result<LevelBuffers, GpuError> {
         Ok(LevelBuffers {
             count,
+            length,
             paths,
             hits: answer_buffer::<HitRecord>(context, "closest hits", count)?,
             points: answer_buffer::<SurfacePoint>(context, "shading points", count)?,
         })
+    }
+
+    /// A dispatch over the level's rays or points, one invocation each.
+    pub fn dispatch<'a>(&'a self, scene: &'a GpuScene) -> Dispatch<'a> {
+        match &self.length {
+            Some(length) => Dispatch::counted_on_gpu(scene, self.count, length),
+            None => Dispatch::new(scene, self.count),
+        }
     }
 }

@@ -9,7 +9,7 @@ use glam::Vec2;
 
 use super::context::{GpuContext, GpuError};
 use super::contract::{ITEMS, NO_MESH};
-use super::pass::{Dispatch, WorldPass, WorldUse, BATCH};
+use super::pass::{WorldPass, WorldUse, BATCH};
 use super::scene::GpuScene;
 use super::shaders::Entry;
 use super::surface::{LevelBuffers, PathRay};
@@ -89,6 +89,7 @@ impl RayQueries {
         for batch in rays.chunks(BATCH) {
             let paths: Vec<PathRay> = batch.iter().map(PathRay::from).collect();
             records.extend(self.closest.run::<PathRay, HitRecord>(
+                "the rays' closest hits",
                 context,
                 scene,
                 &paths,
@@ -114,13 +115,7 @@ impl RayQueries {
         level: &LevelBuffers,
     ) {
         let reads = [(ITEMS, &level.paths)];
-        (self.closest).record(
-            context,
-            encoder,
-            Dispatch::new(scene, level.count),
-            &reads,
-            &level.hits,
-        );
+        (self.closest).record(context, encoder, level.dispatch(scene), &reads, &level.hits);
     }
 
     /// Whether anything lies on each ray in `(0, t_max)`.
@@ -133,7 +128,14 @@ impl RayQueries {
         let mut occluded = Vec::with_capacity(rays.len());
         for batch in rays.chunks(BATCH) {
             let gpu_rays: Vec<GpuRay> = batch.iter().map(GpuRay::from).collect();
-            let words: Vec<u32> = self.any.run(context, scene, &gpu_rays, &[], 0)?;
+            let words: Vec<u32> = self.any.run(
+                "whether each ray is blocked",
+                context,
+                scene,
+                &gpu_rays,
+                &[],
+                0,
+            )?;
             occluded.extend(words.into_iter().map(|word| word != 0));
         }
         Ok(occluded)

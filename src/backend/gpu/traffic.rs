@@ -1,7 +1,7 @@
 //! What crosses between the CPU and the GPU in a run, counted where it
 //! crosses: every upload goes through [`GpuContext::upload`] or
 //! [`GpuContext::write`], and every blocking read-back through
-//! `pass::read_back`, so these counters see all of it. A frame's share is
+//! `recording::Recording::wait`, so these counters see all of it. A frame's share is
 //! the difference of two snapshots ([`Traffic::since`]), reported as the
 //! `gpu` object of `--stats`: the measure the GPU-resident light mesh
 //! (issue 33) is held to, a steady frame waiting on the GPU at most twice.
@@ -35,7 +35,7 @@ pub struct Traffic {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct GpuTraffic {
     /// Blocking read-backs: each submits what was recorded and waits for
-    /// the GPU to finish it.
+    /// the GPU to finish it, bringing back one or several buffers.
     pub waits: u64,
     /// Bytes written into GPU buffers (uploads, uniforms, mask bricks).
     pub bytes_up: u64,

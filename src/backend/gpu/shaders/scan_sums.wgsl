@@ -1,8 +1,14 @@
 // Compaction, step 2: one workgroup turns the groups' totals into each
-// group's exclusive offset, with the grand total after the last.
+// group's exclusive offset, with the grand total after the last. The
+// grand total is the next level's length: it goes into the level's
+// length words (its item count, then the workgroups of an indirect
+// dispatch over it) and onto the film's count of secondary
+// rays, so the CPU never waits for it.
 
 @group(0) @binding(ITEMS) var<storage, read> block_totals: array<u32>;
 @group(0) @binding(ANSWERS) var<storage, read_write> block_offsets: array<u32>;
+@group(0) @binding(LEVEL_LENGTH) var<storage, read_write> level_length: array<u32, LEVEL_LENGTH_WORDS>;
+@group(0) @binding(COUNTERS) var<storage, read_write> counters: array<atomic<u32>, FILM_COUNTERS>;
 
 var<workgroup> lane_sums: array<u32, WORKGROUP>;
 
@@ -26,6 +32,13 @@ fn scan_sums(@builtin(local_invocation_index) lane: u32) {
             running += own;
         }
         block_offsets[blocks] = running;
+        // A level holds at most a batch (`scatter.rs`), so its
+        // workgroups fit in x.
+        level_length[0] = running;
+        level_length[1] = (running + WORKGROUP - 1u) / WORKGROUP;
+        level_length[2] = 1u;
+        level_length[3] = 1u;
+        atomicAdd(&counters[COUNTER_SECONDARY_RAYS], running);
     }
     workgroupBarrier();
     var offset = lane_sums[lane];
