@@ -158,24 +158,15 @@ impl LightMesh {
                         let Some((ball, lamps)) = &wide else {
                             continue;
                         };
-                        for (reached, (&reach, &lamp)) in
-                            lamps_reached.iter_mut().zip(point_reach.iter().zip(lamps))
-                        {
-                            *reached = reach & lamp;
-                        }
                         let at = PointLanes::new(point);
                         let parts = self.faint_budget();
-                        let faint = &mut faint_lamps;
-                        faint::mark(
-                            lights,
-                            &at,
-                            &lamps_reached,
-                            parts,
-                            &mut faint_scratch,
-                            faint,
-                        );
-                        for (reached, &faint) in lamps_reached.iter_mut().zip(&faint_lamps) {
-                            *reached &= !faint;
+                        let (faint, scratch) = (&mut faint_lamps, &mut faint_scratch);
+                        faint::mark(lights, &at, (point_reach, lamps), parts, scratch, faint);
+                        for (reached, ((&reach, &lamp), &faint)) in lamps_reached
+                            .iter_mut()
+                            .zip(point_reach.iter().zip(lamps).zip(&faint_lamps))
+                        {
+                            *reached = reach & lamp & !faint;
                         }
                         if lamps_reached.iter().all(|&word| word == 0) {
                             continue;

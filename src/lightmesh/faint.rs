@@ -130,13 +130,13 @@ pub struct FaintScratch {
 }
 
 /// Sets in `faint` (a bit per light, 64 to a word) the faint lamps among
-/// `lamps` (the point's lamps that may reach it, the same layout) at the
-/// point `at`, under the budget of `parts` ([`budget_parts`]). A lamp's
-/// term is its Omega's largest channel, as formula (2) will weigh it.
+/// the lights of `reach` that are `lamps` (the same layout) at the point
+/// `at`, under the budget of `parts` ([`budget_parts`]). A lamp's term is
+/// its Omega's largest channel, as formula (2) will weigh it.
 pub fn mark(
     lights: &LightLanes,
     at: &PointLanes,
-    lamps: &[u64],
+    (reach, lamps): (&[u64], &[u64]),
     parts: u32,
     scratch: &mut FaintScratch,
     faint: &mut [u64],
@@ -147,7 +147,8 @@ pub fn mark(
     }
     let terms = &mut scratch.terms;
     terms.clear();
-    for (word, &bits) in lamps.iter().enumerate() {
+    for (word, (&reach, &lamps)) in reach.iter().zip(lamps).enumerate() {
+        let bits = reach & lamps;
         for block_in_word in 0..64 / LANES {
             let first = block_in_word * LANES;
             let lanes = (bits >> first) as u8;

@@ -87,10 +87,9 @@ pub struct Scratch<'a> {
     agreement: Agreement,
     /// The points' wide sets (`penumbra: wide`).
     wide: WideScratch,
-    /// The frame's lamps, the point's among them, and those it leaves at
-    /// the half-ball's answer (`super::faint`), a bit per light.
+    /// The frame's lamps, and those the point leaves at the half-ball's
+    /// answer (`super::faint`), a bit per light.
     lamps: Vec<u64>,
-    reaching_lamps: Vec<u64>,
     faint: Vec<u64>,
     faint_scratch: FaintScratch,
     bricks: BrickCache<'a>,
@@ -105,7 +104,6 @@ impl<'a> Scratch<'a> {
             agreement: Agreement::new(mesh.lattice, mesh.radius(), 1, mesh.masks().words()),
             wide: WideScratch::new(mesh, lights),
             lamps: lamps(lights, mesh.masks().words()),
-            reaching_lamps: vec![0; mesh.masks().words()],
             faint: vec![0; mesh.masks().words()],
             faint_scratch: FaintScratch::default(),
             bricks: BrickCache::new(mesh.masks()),
@@ -173,7 +171,6 @@ impl LightMesh {
             agreement,
             wide,
             lamps,
-            reaching_lamps,
             faint,
             faint_scratch,
             bricks,
@@ -216,12 +213,8 @@ impl LightMesh {
         let (all, any) = (&sight.all, &sight.any);
         let at = PointLanes::new(point);
         // The lamps whose penumbrae are not worth their rays here.
-        for (reaching, (&reach, &lamps)) in reaching_lamps.iter_mut().zip(reach.iter().zip(&*lamps))
-        {
-            *reaching = reach & lamps;
-        }
         let parts = self.faint_budget();
-        faint::mark(lights, &at, reaching_lamps, parts, faint_scratch, faint);
+        faint::mark(lights, &at, (reach, lamps), parts, faint_scratch, faint);
         // The lamps the point's own set agrees on but its wide set does
         // not: it lies in their penumbra, beyond the set's reach.
         wide.look(
@@ -232,11 +225,11 @@ impl LightMesh {
         );
         let wide = &*wide;
 
+        // Where the blocker's rays start, the same for every light.
+        let origin = offset_ray_origin(point.position, point.geometric_normal);
         // Omega eight lights at a time, for the blocks where some node sees
         // a light or the wide set disagrees on it; the sum runs in light
         // order.
-        // Where the blocker's rays start, the same for every light.
-        let origin = offset_ray_origin(point.position, point.geometric_normal);
         for (word, &lit) in any.iter().enumerate() {
             let lit = lit | wide.mixed(word);
             for block_in_word in 0..64 / LANES {
