@@ -140,6 +140,14 @@ struct StudyArgs {
         default_value = "whitted,lmm,lmm1,area"
     )]
     methods: Vec<Method>,
+    /// Measure these frames too, made elsewhere in SECONDS each (another
+    /// renderer's, or a still sequence's: several frames, whose errors are
+    /// pooled and whose flicker is measured). Repeatable.
+    #[arg(
+        long = "candidate",
+        value_name = "NAME=SECONDS:FRAME.exr[,FRAME.exr...]"
+    )]
+    candidates: Vec<study::candidate::Candidate>,
     /// Directory for study.json, study.csv, study.png, crops.png and reference.exr.
     #[arg(long)]
     out: PathBuf,
@@ -772,6 +780,7 @@ fn run_study(args: &StudyArgs) -> Result<(), Failure> {
         reference_layer: args.reference_layer.clone(),
         reference_spp: args.reference_spp,
         methods: args.methods.clone(),
+        candidates: args.candidates.clone(),
         out: args.out.clone(),
         threads: args.threads,
     };

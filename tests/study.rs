@@ -164,6 +164,96 @@ fn a_given_reference_is_measured_against_with_its_mask() {
     );
 }
 
+#[test]
+fn candidates_are_measured_beside_the_methods_with_their_flicker() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = box_scene(dir.path());
+    let first = whitted_study(&scene, dir.path());
+    let reference = first.join("reference.exr");
+    let reference = reference.to_str().unwrap();
+    let dark = dir.path().join("dark.exr");
+    write_exr(
+        &dark,
+        &Image::filled(48, 27, Vec4::ZERO),
+        ExrPrecision::Half,
+    )
+    .unwrap();
+    let dark = dark.to_str().unwrap();
+    let out = dir.path().join("second");
+    let copy = format!("copy 1 frame=0.5:{reference}");
+    let still = format!("still, 2 frames=0.25:{reference},{reference}");
+    let blinking = format!("blinking=0.125:{reference},{dark}");
+    let mut args = vec!["study", scene.as_str(), "--quiet", "--width", "48"];
+    args.extend(["--height", "27", "--methods", "whitted", "--reference"]);
+    args.extend([reference, "--candidate", &copy, "--candidate", &still]);
+    args.extend(["--candidate", &blinking, "--out", out.to_str().unwrap()]);
+    let output = lmanim(&args);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_str(&text(&out.join("study.json"))).unwrap();
+    let runs = json["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 4);
+    assert_eq!(runs[0]["method"], "whitted");
+    assert!(runs[0]["flicker"].is_null());
+    let [copy, still, blinking] = [&runs[1], &runs[2], &runs[3]];
+    assert_eq!(copy["candidate"], "copy 1 frame");
+    assert!(copy.get("method").is_none());
+    assert_eq!(
+        (copy["seconds"].as_f64(), copy["rmse"].as_f64()),
+        (Some(0.5), Some(0.0))
+    );
+    assert_eq!(copy["penumbra_rmse"], 0.0);
+    assert!(copy["flicker"].is_null());
+    // The reference twice: its errors, and nothing flickers.
+    assert_eq!(
+        (still["frames"].as_u64(), still["rmse"].as_f64()),
+        (Some(2), Some(0.0))
+    );
+    assert_eq!(still["flicker"]["lit"], 0.0);
+    // The reference, then black: a lit pixel's error is 0, then −x (its
+    // reference's share of the light available), so the pooled RMSE and
+    // the flicker (the standard deviation of {0, −x}) are both the RMS
+    // of x/√2.
+    let value = |run: &serde_json::Value, key: &str| run[key].as_f64().unwrap();
+    let flicker = &blinking["flicker"];
+    assert!(value(blinking, "rmse") > 0.3, "{blinking}");
+    assert!((value(blinking, "rmse") - value(flicker, "lit")).abs() < 1e-9);
+    assert!((value(blinking, "penumbra_rmse") - value(flicker, "penumbra")).abs() < 1e-9);
+    let csv = text(&out.join("study.csv"));
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(lines[0].ends_with(",candidate,frames,flicker_lit,flicker_penumbra"));
+    assert!(lines[3].starts_with(",,,1,0.250000,"), "{}", lines[3]);
+    assert!(
+        lines[3].contains(",\"still, 2 frames\",2,0.000000,"),
+        "{}",
+        lines[3]
+    );
+    assert!(out.join("study.png").is_file() && out.join("crops.png").is_file());
+
+    // A candidate's bad frame stops the study before anything renders.
+    let study = |candidate: &str| {
+        let mut args = vec!["study", scene.as_str(), "--quiet", "--width", "48"];
+        args.extend(["--height", "27", "--methods", "whitted", "--candidate"]);
+        args.extend([candidate, "--out", out.to_str().unwrap()]);
+        lmanim(&args)
+    };
+    let missing = dir.path().join("missing.exr");
+    let output = study(&format!("gone=1:{reference},{}", missing.display()));
+    assert_bad_input(&output, "candidate \"gone\"");
+    assert!(String::from_utf8_lossy(&output.stderr).contains("missing.exr"));
+    let small = dir.path().join("small.exr");
+    write_exr(&small, &Image::filled(4, 4, Vec4::ONE), ExrPrecision::Float).unwrap();
+    let output = study(&format!("small=1:{}", small.display()));
+    assert_bad_input(&output, "small.exr");
+    assert!(String::from_utf8_lossy(&output.stderr).contains("4x4"));
+    let output = study("no seconds:a.exr");
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("NAME=SECONDS"));
+}
+
 /// A part of an EXR: its name, if any, and its channels' names and values.
 type Part<'a> = (Option<&'a str>, Vec<(&'a str, Vec<f32>)>);
 

@@ -195,31 +195,82 @@ impl Reference {
 
     /// How far `image` is from the reference.
     pub fn errors(&self, image: &Image) -> Result<Errors, SizeMismatch> {
-        same_size(
-            "the frame measured",
-            (image.width, image.height),
-            &self.image,
-        )?;
+        let (errors, _) = self.sequence_errors(std::slice::from_ref(image))?;
+        Ok(errors)
+    }
+
+    /// How far the frames of a still sequence are from the reference,
+    /// every pixel of every frame counted once (for one frame, that
+    /// frame's errors), and how much they flicker (None for fewer than
+    /// two frames).
+    pub fn sequence_errors(
+        &self,
+        frames: &[Image],
+    ) -> Result<(Errors, Option<Flicker>), SizeMismatch> {
+        for frame in frames {
+            same_size(
+                "the frame measured",
+                (frame.width, frame.height),
+                &self.image,
+            )?;
+        }
         let mut lit = Accumulator::default();
         let mut penumbra = Accumulator::default();
-        for (i, (&measured, &reference)) in image.pixels.iter().zip(&self.image.pixels).enumerate()
-        {
+        // Per pixel, the variance of its error over the frames, summed.
+        let (mut lit_variance, mut penumbra_variance) = (0.0, 0.0);
+        let mut errors = Vec::with_capacity(frames.len());
+        for (i, reference) in self.image.pixels.iter().enumerate() {
             if !self.lit[i] {
                 continue;
             }
-            let error = (luminance(measured) - luminance(reference)) / self.available[i];
-            lit.add(error);
+            let reference = luminance(*reference);
+            errors.clear();
+            errors.extend(
+                frames
+                    .iter()
+                    .map(|frame| (luminance(frame.pixels[i]) - reference) / self.available[i]),
+            );
+            for &error in &errors {
+                lit.add(error);
+                if self.penumbra[i] {
+                    penumbra.add(error);
+                }
+            }
+            let variance = sample_variance(&errors);
+            lit_variance += variance;
             if self.penumbra[i] {
-                penumbra.add(error);
+                penumbra_variance += variance;
             }
         }
-        Ok(Errors {
+        let errors = Errors {
             rmse: lit.rms().unwrap_or(0.0),
             penumbra_rmse: penumbra.rms(),
             max_error: lit.largest,
             within_1pct: lit.within_share().unwrap_or(1.0),
-        })
+        };
+        let pixels = |count: usize| (count / frames.len().max(1)) as f64;
+        let flicker = (frames.len() > 1).then(|| Flicker {
+            lit: (lit_variance / pixels(lit.count).max(1.0)).sqrt(),
+            penumbra: (penumbra.count > 0)
+                .then(|| (penumbra_variance / pixels(penumbra.count)).sqrt()),
+        });
+        Ok((errors, flicker))
     }
+}
+
+/// The unbiased variance of `values` (0 for fewer than two), taken about
+/// the first value so that equal values give exactly 0.
+fn sample_variance(values: &[f64]) -> f64 {
+    let [first, ..] = values else {
+        return 0.0;
+    };
+    if values.len() < 2 {
+        return 0.0;
+    }
+    let n = values.len() as f64;
+    let mean = values.iter().map(|v| v - first).sum::<f64>() / n;
+    let squares: f64 = values.iter().map(|v| (v - first - mean).powi(2)).sum();
+    squares / (n - 1.0)
 }
 
 fn same_size(
@@ -250,6 +301,20 @@ pub struct Errors {
     pub max_error: f64,
     /// Share of lit pixels whose error is at most 1%.
     pub within_1pct: f64,
+}
+
+/// How much the frames of a still sequence differ from one another where
+/// nothing changes: per pixel, the standard deviation over the frames of
+/// its error (its luminance as a share of the light available there, the
+/// error's units), root mean square over the lit pixels and over the
+/// penumbra. 0 for a method that renders the same frame every time; a
+/// Monte Carlo renderer whose noise a new seed redraws each frame shows
+/// it here even where a denoiser smooths every single frame.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Flicker {
+    pub lit: f64,
+    /// None when the reference has no penumbra pixel.
+    pub penumbra: Option<f64>,
 }
 
 #[derive(Default)]
@@ -350,6 +415,47 @@ mod tests {
         frame.pixels[9] = Vec4::ZERO;
         let errors = measure.errors(&frame).unwrap();
         assert!((errors.max_error - 1.0).abs() < 1e-9, "{errors:?}");
+    }
+
+    #[test]
+    fn a_still_sequence_pools_its_errors_and_measures_its_flicker() {
+        let (reference, unshadowed) = scene();
+        let measure = Reference::new(reference.clone(), &unshadowed, &unshadowed, None).unwrap();
+        // Frames alternately brighter and darker by a tenth of U: each
+        // pixel's error is ±0.1, its standard deviation over the four
+        // frames √(4·0.01 / 3).
+        let shifted = |offset: f32| {
+            let mut frame = reference.clone();
+            for (p, u) in frame.pixels.iter_mut().zip(&unshadowed.pixels) {
+                *p += *u * offset;
+            }
+            frame
+        };
+        let frames = [shifted(0.1), shifted(-0.1), shifted(0.1), shifted(-0.1)];
+        let (errors, flicker) = measure.sequence_errors(&frames).unwrap();
+        assert!((errors.rmse - 0.1).abs() < 1e-6, "{errors:?}");
+        assert!((errors.penumbra_rmse.unwrap() - 0.1).abs() < 1e-6);
+        let flicker = flicker.unwrap();
+        let expected = (4.0 * 0.01f64 / 3.0).sqrt();
+        assert!((flicker.lit - expected).abs() < 1e-6, "{flicker:?}");
+        assert!((flicker.penumbra.unwrap() - expected).abs() < 1e-6);
+        // The same frame every time: the one frame's errors (up to the
+        // order of the sums), no flicker.
+        let still = [shifted(0.1), shifted(0.1), shifted(0.1)];
+        let (pooled, flicker) = measure.sequence_errors(&still).unwrap();
+        let one = measure.errors(&still[0]).unwrap();
+        assert!((pooled.rmse - one.rmse).abs() < 1e-12);
+        assert!((pooled.penumbra_rmse.unwrap() - one.penumbra_rmse.unwrap()).abs() < 1e-12);
+        assert_eq!(
+            (pooled.max_error, pooled.within_1pct),
+            (one.max_error, one.within_1pct)
+        );
+        assert_eq!(flicker.unwrap().lit, 0.0);
+        // One frame is no sequence.
+        assert_eq!(measure.sequence_errors(&still[..1]).unwrap().1, None);
+        // A frame of another size anywhere in the sequence is refused.
+        let small = grey(5, 4, |_, _| 1.0);
+        assert!(measure.sequence_errors(&[reference, small]).is_err());
     }
 
     #[test]

@@ -2,7 +2,8 @@
 //! scene. It renders a reference (the Monte Carlo lamps at many samples,
 //! or a ground-truth EXR from another renderer), then the sweep of
 //! [`sweep::plan`]: every method at the settings a user would choose
-//! between, each timed in this process on a warm machine. Each frame's
+//! between, each timed in this process on a warm machine, and then the
+//! [`candidate`]s, frames made elsewhere and timed there. Each frame's
 //! error against the reference is [`measure`]'s; the tables are
 //! [`report`]'s and the pictures [`plot`]'s.
 //!
@@ -12,6 +13,7 @@
 //! making to its last pixel. Nothing is read from or written to the light
 //! mesh's disk cache.
 
+pub mod candidate;
 pub mod measure;
 pub mod plot;
 pub mod report;
@@ -30,10 +32,11 @@ use crate::schedule::Timeline;
 use crate::sequence::{RunError, Sequence};
 use crate::settings::{BackendKind, Method, Settings, SettingsError};
 use crate::stats::FrameStats;
+use candidate::Candidate;
 use measure::{Mask, Reference, SizeMismatch};
 use plot::{Crop, PlotError};
 use report::{ReferenceReport, StudyReport};
-use sweep::{RunResult, RunSpec};
+use sweep::{RunResult, RunSpec, Source};
 
 /// Samples per pixel of the default reference: 16 times the densest
 /// `area` run of the sweep (64), so that its Monte Carlo noise is about a
@@ -71,6 +74,8 @@ pub struct StudyOptions {
     pub reference_spp: u32,
     /// Methods to sweep, in the order they are run and drawn.
     pub methods: Vec<Method>,
+    /// Frames made elsewhere, measured after the sweep.
+    pub candidates: Vec<Candidate>,
     pub out: PathBuf,
     /// Worker threads; None uses every core.
     pub threads: Option<usize>,
@@ -91,6 +96,8 @@ pub enum StudyError {
     NoLampRadius { file: String },
     #[error(transparent)]
     ReadReference(OutputError),
+    #[error("candidate {name:?}: {source}")]
+    ReadCandidate { name: String, source: OutputError },
     #[error("{file}: {source}")]
     Size { file: String, source: SizeMismatch },
     #[error("{file}: {fault}")]
@@ -110,6 +117,7 @@ impl StudyError {
             | StudyError::Usage(_)
             | StudyError::NoLampRadius { .. }
             | StudyError::ReadReference(_)
+            | StudyError::ReadCandidate { .. }
             | StudyError::Size { .. }
             | StudyError::NothingToMeasure { .. } => true,
             StudyError::Backend(_) | StudyError::Output(_) | StudyError::Plot(_) => false,
@@ -119,7 +127,9 @@ impl StudyError {
 
 /// Runs the study of `options`, writing `study.json`, `study.csv`,
 /// `study.png`, `crops.png` and the reference (`reference.exr`) to
-/// `options.out`; `progress` hears one line per step.
+/// `options.out`; `progress` hears one line per step. Candidates' frames
+/// are read before anything is rendered, so that a wrong path stops the
+/// study at once.
 pub fn run(
     options: &StudyOptions,
     mut progress: impl FnMut(&str),
@@ -146,6 +156,11 @@ pub fn run(
             file: scene_file.clone(),
         })?;
 
+    let candidates = options
+        .candidates
+        .iter()
+        .map(read_candidate)
+        .collect::<Result<Vec<_>, _>>()?;
     let (reference, mut reference_report) =
         bench.reference(options, &settings, lamp_radius, &mut progress)?;
     let reference_path = options.out.join("reference.exr");
@@ -190,7 +205,7 @@ pub fn run(
             None => best.push((*spec, image, accuracy)),
         }
         runs.push(RunResult {
-            method: spec.method,
+            source: Source::Method(spec.method),
             h: h.or(spec.h),
             ki: spec.ki,
             spp: spec.spp,
@@ -198,6 +213,54 @@ pub fn run(
             errors,
             default_lattice,
             pareto: false,
+            frames: 1,
+            flicker: None,
+        });
+    }
+    // Per family of candidates, its most accurate one's first frame.
+    let mut best_candidates: Vec<(String, Image, f64)> = Vec::new();
+    for (candidate, frames) in options.candidates.iter().zip(candidates) {
+        let (errors, flicker) =
+            reference
+                .sequence_errors(&frames)
+                .map_err(|source| StudyError::Size {
+                    file: candidate.frames[0].display().to_string(),
+                    source,
+                })?;
+        progress(&format!(
+            "candidate {}: {:.3} s, RMSE {:.4}, penumbra RMSE {}{}",
+            candidate.name,
+            candidate.seconds,
+            errors.rmse,
+            errors
+                .penumbra_rmse
+                .map_or("-".into(), |e| format!("{e:.4}")),
+            flicker.map_or(String::new(), |f| format!(
+                ", flicker {:.4} over {} frames",
+                f.lit,
+                frames.len()
+            )),
+        ));
+        let accuracy = errors.penumbra_rmse.unwrap_or(errors.rmse);
+        let family = Candidate::family(&candidate.name);
+        let count = frames.len();
+        let first = frames.into_iter().next().expect("a candidate has a frame");
+        match (best_candidates.iter_mut()).find(|(kept, ..)| Candidate::family(kept) == family) {
+            Some(kept) if kept.2 <= accuracy => {}
+            Some(kept) => *kept = (candidate.name.clone(), first, accuracy),
+            None => best_candidates.push((candidate.name.clone(), first, accuracy)),
+        }
+        runs.push(RunResult {
+            source: Source::Candidate(candidate.name.clone()),
+            h: None,
+            ki: None,
+            spp: 1,
+            seconds: candidate.seconds,
+            errors,
+            default_lattice: false,
+            pareto: false,
+            frames: count,
+            flicker,
         });
     }
     sweep::mark_pareto_front(&mut runs);
@@ -233,6 +296,13 @@ pub fn run(
         crops.push(Crop {
             image,
             title: spec.label(),
+            figures: format!("penumbra RMSE {accuracy:.4}"),
+        });
+    }
+    for (name, image, accuracy) in &best_candidates {
+        crops.push(Crop {
+            image,
+            title: name.clone(),
             figures: format!("penumbra RMSE {accuracy:.4}"),
         });
     }
@@ -392,6 +462,20 @@ fn read_reference(path: &Path, layer: Option<&str>) -> Result<ExrPicture, StudyE
     output::read_exr_picture(path, layer).map_err(StudyError::ReadReference)
 }
 
+/// A candidate's frames, each its file's beauty.
+fn read_candidate(candidate: &Candidate) -> Result<Vec<Image>, StudyError> {
+    (candidate.frames.iter())
+        .map(|frame| {
+            output::read_exr_picture(frame, None)
+                .map(|picture| picture.image)
+                .map_err(|source| StudyError::ReadCandidate {
+                    name: candidate.name.clone(),
+                    source,
+                })
+        })
+        .collect()
+}
+
 /// The rendered reference's own RMSE, from the densest `area` run at s
 /// samples: its error holds the noise of both, σ²/s + σ²/N, so the
 /// reference's (σ/√N) is that error over √(N/s + 1).
@@ -399,7 +483,7 @@ fn estimated_noise(reference: &ReferenceReport, runs: &[RunResult]) -> Option<f6
     let n = f64::from(reference.spp?);
     let densest = runs
         .iter()
-        .filter(|run| run.method == Method::Area)
+        .filter(|run| run.method() == Some(Method::Area))
         .max_by_key(|run| run.spp)?;
     Some(densest.errors.rmse / (n / f64::from(densest.spp) + 1.0).sqrt())
 }

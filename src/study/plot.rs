@@ -1,6 +1,6 @@
 //! The study's pictures: `study.png`, error against time on log-log axes,
-//! one series per method with the Pareto front marked, for the lit pixels
-//! and for the penumbra; and `crops.png`, the same penumbra crop from the
+//! one series per method (and per family of candidates) with the Pareto
+//! front marked, for the lit pixels and for the penumbra; and `crops.png`, the same penumbra crop from the
 //! reference and from each method's most accurate run (a light-mesh
 //! method's run at the default lattice before it), side by side.
 //!
@@ -10,8 +10,9 @@
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 
+use super::candidate::Candidate;
 use super::measure::Reference;
-use super::sweep::{pareto_front, RunResult};
+use super::sweep::{pareto_front, RunResult, Source};
 use crate::output::{tone_map, write_srgb_png, Image, OutputError};
 use crate::settings::Method;
 
@@ -35,6 +36,56 @@ fn colour(method: Method) -> RGBColor {
         Method::Lmm1 => RGBColor(44, 160, 44),
         Method::Area => RGBColor(214, 39, 40),
     }
+}
+
+/// The candidates' families' colours, in the order they first appear.
+const CANDIDATE_COLOURS: [RGBColor; 5] = [
+    RGBColor(255, 127, 14),
+    RGBColor(23, 190, 207),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(188, 189, 34),
+];
+
+/// One series of points in both panels: its legend and colour, and which
+/// runs it draws.
+struct Series {
+    label: String,
+    colour: RGBColor,
+    runs: Vec<usize>,
+}
+
+/// A series per method of `methods` (in that order), then one per family
+/// of candidates (`Candidate::family`, in the order they first appear).
+fn series(runs: &[RunResult], methods: &[Method]) -> Vec<Series> {
+    let mut all: Vec<Series> = methods
+        .iter()
+        .map(|&method| Series {
+            label: method.to_string(),
+            colour: colour(method),
+            runs: (runs.iter().enumerate())
+                .filter(|(_, run)| run.method() == Some(method))
+                .map(|(index, _)| index)
+                .collect(),
+        })
+        .collect();
+    let mut families: Vec<Series> = Vec::new();
+    for (index, run) in runs.iter().enumerate() {
+        let Source::Candidate(name) = &run.source else {
+            continue;
+        };
+        let family = Candidate::family(name);
+        match families.iter_mut().find(|series| series.label == family) {
+            Some(series) => series.runs.push(index),
+            None => families.push(Series {
+                label: family.to_owned(),
+                colour: CANDIDATE_COLOURS[families.len() % CANDIDATE_COLOURS.len()],
+                runs: vec![index],
+            }),
+        }
+    }
+    all.extend(families);
+    all
 }
 
 fn use_embedded_font() {
@@ -66,13 +117,13 @@ pub fn error_against_time(
                 run.errors.penumbra_rmse
             }),
         ];
+        let series = series(runs, methods);
         for (panel, (title, measure)) in panels.iter().zip(measures) {
-            let points: Vec<(Method, f64, f64)> = runs
+            let points: Vec<Option<(f64, f64)>> = runs
                 .iter()
-                .filter_map(|run| Some((run.method, run.seconds, measure(run)?)))
-                .map(|(method, seconds, error)| (method, seconds.max(1e-4), error.max(1e-5)))
+                .map(|run| Some((run.seconds.max(1e-4), measure(run)?.max(1e-5))))
                 .collect();
-            draw_panel(panel, title, &points, methods).map_err(|e| fault(&e))?;
+            draw_panel(panel, title, &points, &series).map_err(|e| fault(&e))?;
         }
         root.present().map_err(|e| fault(&e))?;
     }
@@ -86,12 +137,15 @@ type Panel<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
 type DrawResult =
     Result<(), DrawingAreaErrorKind<<BitMapBackend<'static> as DrawingBackend>::ErrorType>>;
 
+/// Draws one panel; `points[i]` is run i's (seconds, error), None where
+/// it has no such error.
 fn draw_panel(
     panel: &Panel,
     title: &str,
-    points: &[(Method, f64, f64)],
-    methods: &[Method],
+    points: &[Option<(f64, f64)>],
+    series: &[Series],
 ) -> DrawResult {
+    let drawn: Vec<(f64, f64)> = points.iter().flatten().copied().collect();
     let range = |values: Vec<f64>| {
         let low = values.iter().copied().fold(f64::INFINITY, f64::min);
         let high = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -101,8 +155,8 @@ fn draw_panel(
             0.01..1.0
         }
     };
-    let x = range(points.iter().map(|p| p.1).collect());
-    let y = range(points.iter().map(|p| p.2).collect());
+    let x = range(drawn.iter().map(|p| p.0).collect());
+    let y = range(drawn.iter().map(|p| p.1).collect());
     let mut chart = ChartBuilder::on(panel)
         .caption(title, (FAMILY, 22))
         .margin(16)
@@ -119,22 +173,17 @@ fn draw_panel(
         .label_style((FAMILY, 14))
         .axis_desc_style((FAMILY, 16))
         .draw()?;
-    for &method in methods {
-        let colour = colour(method);
-        let series: Vec<(f64, f64)> = points
-            .iter()
-            .filter(|p| p.0 == method)
-            .map(|p| (p.1, p.2))
-            .collect();
+    for series in series {
+        let colour = series.colour;
+        let at: Vec<(f64, f64)> = series.runs.iter().filter_map(|&i| points[i]).collect();
         chart
-            .draw_series(series.iter().map(|&at| Circle::new(at, 4, colour.filled())))?
-            .label(method.to_string())
+            .draw_series(at.iter().map(|&at| Circle::new(at, 4, colour.filled())))?
+            .label(series.label.clone())
             .legend(move |(x, y)| Circle::new((x + 10, y), 4, colour.filled()));
     }
-    let coordinates: Vec<(f64, f64)> = points.iter().map(|p| (p.1, p.2)).collect();
-    let mut front: Vec<(f64, f64)> = pareto_front(&coordinates)
+    let mut front: Vec<(f64, f64)> = pareto_front(&drawn)
         .into_iter()
-        .zip(&coordinates)
+        .zip(&drawn)
         .filter_map(|(on, &at)| on.then_some(at))
         .collect();
     front.sort_by(|a, b| a.0.total_cmp(&b.0));

@@ -8,7 +8,7 @@ use std::path::Path;
 use serde::Serialize;
 
 use super::measure::Census;
-use super::sweep::RunResult;
+use super::sweep::{RunResult, Source};
 use crate::output::{write_atomically, OutputError};
 
 /// Where the reference came from and how it was classified.
@@ -65,17 +65,23 @@ impl StudyReport {
     }
 
     /// The runs as CSV, a header line first; cells that do not apply are
-    /// empty.
+    /// empty. A candidate's row has its name under `candidate` (quoted
+    /// where it must be) and no `method`; the columns after `pareto` came
+    /// with candidates, so older readers of the first eleven still work.
     pub fn csv(&self) -> String {
         let mut text = String::from(
-            "method,h,ki,spp,seconds,rmse,penumbra_rmse,max_error,within_1pct,default_lattice,pareto\n",
+            "method,h,ki,spp,seconds,rmse,penumbra_rmse,max_error,within_1pct,default_lattice,pareto,candidate,frames,flicker_lit,flicker_penumbra\n",
         );
         let cell = |value: Option<String>| value.unwrap_or_default();
         for run in &self.runs {
             let errors = &run.errors;
+            let (method, candidate) = match &run.source {
+                Source::Method(method) => (method.to_string(), String::new()),
+                Source::Candidate(name) => (String::new(), csv_field(name)),
+            };
+            let flicker = run.flicker.as_ref();
             text += &format!(
-                "{},{},{},{},{:.6},{:.6},{},{:.6},{:.6},{},{}\n",
-                run.method,
+                "{method},{},{},{},{:.6},{:.6},{},{:.6},{:.6},{},{},{candidate},{},{},{}\n",
                 cell(run.h.map(|h| format!("{h:.6}"))),
                 cell(run.ki.map(|ki| ki.to_string())),
                 run.spp,
@@ -86,9 +92,21 @@ impl StudyReport {
                 errors.within_1pct,
                 run.default_lattice,
                 run.pareto,
+                run.frames,
+                cell(flicker.map(|f| format!("{:.6}", f.lit))),
+                cell(flicker.and_then(|f| f.penumbra).map(|e| format!("{e:.6}"))),
             );
         }
         text
+    }
+}
+
+/// `text` as one CSV field: quoted, quotes doubled, where it holds a
+/// comma, a quote or a line break (RFC 4180).
+fn csv_field(text: &str) -> String {
+    match text.contains([',', '"', '\n', '\r']) {
+        true => format!("\"{}\"", text.replace('"', "\"\"")),
+        false => text.to_owned(),
     }
 }
 
@@ -96,11 +114,11 @@ impl StudyReport {
 mod tests {
     use super::*;
     use crate::settings::Method;
-    use crate::study::measure::Errors;
+    use crate::study::measure::{Errors, Flicker};
 
     fn report() -> StudyReport {
         let run = |method, h, ki, penumbra| RunResult {
-            method,
+            source: Source::Method(method),
             h,
             ki,
             spp: 1,
@@ -113,6 +131,8 @@ mod tests {
             },
             default_lattice: h.is_some(),
             pareto: true,
+            frames: 1,
+            flicker: None,
         };
         StudyReport {
             reference: ReferenceReport {
@@ -130,6 +150,15 @@ mod tests {
             runs: vec![
                 run(Method::Whitted, None, None, None),
                 run(Method::Lmm1, Some(0.08), Some(2.5), Some(0.25)),
+                RunResult {
+                    source: Source::Candidate("cycles+oidn 1 spp, 16 seeds".into()),
+                    frames: 16,
+                    flicker: Some(Flicker {
+                        lit: 0.0625,
+                        penumbra: Some(0.5),
+                    }),
+                    ..run(Method::Area, None, None, Some(0.375))
+                },
             ],
         }
     }
@@ -154,6 +183,12 @@ mod tests {
         assert!(whitted["h"].is_null() && whitted["ki"].is_null());
         assert_eq!(json["runs"][1]["method"], "lmm1");
         assert_eq!(json["runs"][1]["penumbra_rmse"], 0.25);
+        assert!(whitted["flicker"].is_null() && whitted.get("candidate").is_none());
+        let candidate = &json["runs"][2];
+        assert!(candidate.get("method").is_none(), "{candidate}");
+        assert_eq!(candidate["candidate"], "cycles+oidn 1 spp, 16 seeds");
+        assert_eq!(candidate["frames"], 16);
+        assert_eq!(candidate["flicker"]["penumbra"], 0.5);
         assert_eq!(json["reference"]["spp"], 1024);
     }
 
@@ -161,13 +196,21 @@ mod tests {
     fn csv_has_a_row_per_run_and_empty_cells_for_nothing() {
         let csv = report().csv();
         let lines: Vec<&str> = csv.lines().collect();
-        assert_eq!(lines.len(), 3);
+        assert_eq!(lines.len(), 4);
         assert!(
             lines[1].starts_with("whitted,,,1,0.250000,0.125000,,0.5"),
             "{}",
             lines[1]
         );
         assert!(lines[2].starts_with("lmm1,0.080000,2.5,1,"), "{}", lines[2]);
+        assert!(lines[2].ends_with(",true,true,,1,,"), "{}", lines[2]);
         assert_eq!(lines[0].split(',').count(), lines[2].split(',').count());
+        // The candidate's name is quoted: it holds a comma.
+        assert!(lines[3].starts_with(",,,1,"), "{}", lines[3]);
+        assert!(
+            lines[3].ends_with(",\"cycles+oidn 1 spp, 16 seeds\",16,0.062500,0.500000"),
+            "{}",
+            lines[3]
+        );
     }
 }

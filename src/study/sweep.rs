@@ -10,7 +10,7 @@
 
 use serde::Serialize;
 
-use super::measure::Errors;
+use super::measure::{Errors, Flicker};
 use crate::settings::{LightMeshSettings, Method, Settings};
 
 /// The swept h·kI / R.
@@ -103,10 +103,21 @@ pub fn plan(methods: &[Method], lamp_radius: f32, default_ki: f32) -> Vec<RunSpe
     runs
 }
 
+/// What made a run's frames: one of lmanim's methods, or a candidate
+/// (`study::candidate`), by its name. In `study.json` a run has a
+/// `"method"` or a `"candidate"`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Source {
+    Method(Method),
+    Candidate(String),
+}
+
 /// What one run measured: the row of `study.json` and `study.csv`.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct RunResult {
-    pub method: Method,
+    #[serde(flatten)]
+    pub source: Source,
     /// The lattice step the light mesh used (the default one's too).
     pub h: Option<f32>,
     pub ki: Option<f32>,
@@ -120,6 +131,21 @@ pub struct RunResult {
     /// No other run is both as fast and as accurate (lit RMSE), and one
     /// of them strictly better.
     pub pareto: bool,
+    /// Frames measured: 1 but for a candidate's still sequence, whose
+    /// errors are pooled over its frames.
+    pub frames: usize,
+    /// How much those frames differ from one another; None for one frame.
+    pub flicker: Option<Flicker>,
+}
+
+impl RunResult {
+    /// The run's method, if lmanim's sweep made it.
+    pub fn method(&self) -> Option<Method> {
+        match self.source {
+            Source::Method(method) => Some(method),
+            Source::Candidate(_) => None,
+        }
+    }
 }
 
 /// Marks the runs on the Pareto front of time against lit RMSE.
@@ -170,7 +196,7 @@ mod tests {
 
     fn run(seconds: f64, rmse: f64) -> RunResult {
         RunResult {
-            method: Method::Whitted,
+            source: Source::Method(Method::Whitted),
             h: None,
             ki: None,
             spp: 1,
@@ -183,6 +209,8 @@ mod tests {
             },
             default_lattice: false,
             pareto: false,
+            frames: 1,
+            flicker: None,
         }
     }
 
