@@ -375,7 +375,7 @@ impl MeshStage<'_> {
                 }
                 counts += mesh.shade(
                     point,
-                    demand.reach_of(index),
+                    demand.of_point(index),
                     self.lanes,
                     job.world,
                     self.point_to_node_tests,

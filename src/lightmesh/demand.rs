@@ -31,13 +31,18 @@ pub struct Demand {
     /// Per point, `words` words: bit i set when light i can reach it (what
     /// shading will ask formula (2) for).
     pub reach: Vec<u64>,
+    /// Per point, `words` words: its faint lamps (`super::faint`), whose
+    /// penumbrae keep the half-ball's answer and whose wide set is not
+    /// demanded. Found once here, for demand and shading both.
+    pub faint: Vec<u64>,
     pub words: usize,
 }
 
 impl Demand {
-    /// The reaching-lights words of point `index`.
-    pub fn reach_of(&self, index: usize) -> &[u64] {
-        &self.reach[index * self.words..(index + 1) * self.words]
+    /// The reaching lights and the faint lamps of point `index`.
+    pub fn of_point(&self, index: usize) -> (&[u64], &[u64]) {
+        let words = index * self.words..(index + 1) * self.words;
+        (&self.reach[words.clone()], &self.faint[words])
     }
 }
 
@@ -125,23 +130,33 @@ impl LightMesh {
             .par_chunks_mut(words)
             .zip(points)
             .for_each(|(point_reach, point)| reaching_lights(point, lights, point_reach));
+        let lamps = wide_ball::lamps(lights.lights(), words);
+        let mut faint = vec![0; points.len() * words];
+        let parts = self.faint_budget();
+        if parts > 0 {
+            (faint.par_chunks_mut(words))
+                .zip(points.par_iter().zip(reach.par_chunks(words)))
+                .for_each_init(FaintScratch::default, |scratch, (faint, (point, reach))| {
+                    let at = PointLanes::new(point);
+                    faint::mark(lights, &at, (reach, &lamps), parts, scratch, faint);
+                });
+        }
 
         let table_bytes = BRICK_NODES * words * std::mem::size_of::<u64>();
         let brick_limit = self.memory_limit / table_bytes;
         let too_large = |bricks: usize| self.too_large(bricks.saturating_mul(table_bytes));
-        let wide = (self.penumbra.asks_wide_set())
-            .then(|| (WideBall::of(self), wide_ball::lamps(lights.lights(), words)));
+        let wide = (self.penumbra.asks_wide_set()).then(|| WideBall::of(self));
         let tables = points
             .par_chunks(CHUNK)
             .zip(reach.par_chunks(CHUNK * words))
+            .zip(faint.par_chunks(CHUNK * words))
             .try_fold(
                 || BrickTables::new(words),
-                |mut tables, (chunk, chunk_reach)| {
+                |mut tables, ((chunk, chunk_reach), chunk_faint)| {
                     let mut nodes = Vec::new();
                     let mut lamps_reached = vec![0; words];
-                    let mut faint_lamps = vec![0; words];
-                    let mut faint_scratch = FaintScratch::default();
-                    for (point, point_reach) in chunk.iter().zip(chunk_reach.chunks(words)) {
+                    let per_point = chunk_reach.chunks(words).zip(chunk_faint.chunks(words));
+                    for (point, (point_reach, point_faint)) in chunk.iter().zip(per_point) {
                         if point_reach.iter().all(|&word| word == 0) {
                             continue;
                         }
@@ -155,16 +170,12 @@ impl LightMesh {
                         for &node in &nodes {
                             tables.need(node, point_reach);
                         }
-                        let Some((ball, lamps)) = &wide else {
+                        let Some(ball) = &wide else {
                             continue;
                         };
-                        let at = PointLanes::new(point);
-                        let parts = self.faint_budget();
-                        let (faint, scratch) = (&mut faint_lamps, &mut faint_scratch);
-                        faint::mark(lights, &at, (point_reach, lamps), parts, scratch, faint);
                         for (reached, ((&reach, &lamp), &faint)) in lamps_reached
                             .iter_mut()
-                            .zip(point_reach.iter().zip(lamps).zip(&faint_lamps))
+                            .zip(point_reach.iter().zip(&lamps).zip(point_faint))
                         {
                             *reached = reach & lamp & !faint;
                         }
@@ -198,6 +209,7 @@ impl LightMesh {
         Ok(Demand {
             bricks,
             reach,
+            faint,
             words,
         })
     }

@@ -13,14 +13,12 @@ use glam::{IVec3, Vec3};
 
 use super::agreement::Agreement;
 use super::enclosure::leave_out_enclosed;
-use super::faint::{self, FaintScratch};
 use super::kernel::{Kernel, Weights};
 use super::lamp_disk;
 use super::masks::BrickCache;
 use super::penumbra::{self, LevelScratch};
 use super::sight::Sight;
 use super::wide::WideScratch;
-use super::wide_ball::lamps;
 use super::{LightMesh, LightMeshStats};
 use crate::accel::offset::offset_ray_origin;
 use crate::accel::{Ray, World};
@@ -87,11 +85,6 @@ pub struct Scratch<'a> {
     agreement: Agreement,
     /// The points' wide sets (`penumbra: wide`).
     wide: WideScratch,
-    /// The frame's lamps, and those the point leaves at the half-ball's
-    /// answer (`super::faint`), a bit per light.
-    lamps: Vec<u64>,
-    faint: Vec<u64>,
-    faint_scratch: FaintScratch,
     bricks: BrickCache<'a>,
 }
 
@@ -103,9 +96,6 @@ impl<'a> Scratch<'a> {
             levels: LevelScratch::default(),
             agreement: Agreement::new(mesh.lattice, mesh.radius(), 1, mesh.masks().words()),
             wide: WideScratch::new(mesh, lights),
-            lamps: lamps(lights, mesh.masks().words()),
-            faint: vec![0; mesh.masks().words()],
-            faint_scratch: FaintScratch::default(),
             bricks: BrickCache::new(mesh.masks()),
         }
     }
@@ -149,14 +139,15 @@ impl LightMesh {
 
     /// Direct light at `point` by formula (2), light by light into
     /// `terms`, and what it cost. `reach` holds the lights that can reach
-    /// the point (from the demand stage); every bit this reads was filled
-    /// from that demand. With `point_to_node_tests` (LMM) only the nodes
+    /// the point and `faint` its faint lamps (both from the demand stage,
+    /// [`super::demand::Demand::of_point`]); every bit this reads was
+    /// filled from that demand. With `point_to_node_tests` (LMM) only the nodes
     /// the point sees are interpolated; without (LMM1) all of them.
     #[allow(clippy::too_many_arguments)]
     pub fn shade(
         &self,
         point: &ShadingPoint,
-        reach: &[u64],
+        (reach, faint): (&[u64], &[u64]),
         lights: &LightLanes,
         world: &World,
         point_to_node_tests: bool,
@@ -170,9 +161,6 @@ impl LightMesh {
             levels,
             agreement,
             wide,
-            lamps,
-            faint,
-            faint_scratch,
             bricks,
         } = scratch;
         let sight = &mut set.sight;
@@ -212,9 +200,6 @@ impl LightMesh {
         } = set;
         let (all, any) = (&sight.all, &sight.any);
         let at = PointLanes::new(point);
-        // The lamps whose penumbrae are not worth their rays here.
-        let parts = self.faint_budget();
-        faint::mark(lights, &at, (reach, lamps), parts, faint_scratch, faint);
         // The lamps the point's own set agrees on but its wide set does
         // not: it lies in their penumbra, beyond the set's reach.
         wide.look(
