@@ -1182,6 +1182,7 @@ fn gpu_fill_bits_equal_the_cpu_fill() {
             })
             .collect(),
         reach: Vec::new(),
+        faint: Vec::new(),
         words,
     };
     let mut on_cpu = LightMesh::new(Lattice::new(0.2), 2.5, lights.len(), 1 << 30);

@@ -140,6 +140,7 @@ fn facade_demand(lattice: &Lattice, lights: usize) -> Demand {
             })
             .collect(),
         reach: Vec::new(),
+        faint: Vec::new(),
         words,
     }
 }
