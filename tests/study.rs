@@ -32,6 +32,15 @@ fn text(path: &Path) -> String {
     std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
+/// An EXR of `width`×`height` pixels all `value`, written in `dir` as
+/// `name`; its path.
+fn filled_exr(dir: &Path, name: &str, (width, height): (u32, u32), value: Vec4) -> PathBuf {
+    let path = dir.join(name);
+    let image = Image::filled(width, height, value);
+    write_exr(&path, &image, ExrPrecision::Half).unwrap();
+    path
+}
+
 const TINY: [&str; 6] = ["--width", "48", "--height", "27", "--reference-spp", "16"];
 
 #[test]
@@ -171,13 +180,7 @@ fn candidates_are_measured_beside_the_methods_with_their_flicker() {
     let first = whitted_study(&scene, dir.path());
     let reference = first.join("reference.exr");
     let reference = reference.to_str().unwrap();
-    let dark = dir.path().join("dark.exr");
-    write_exr(
-        &dark,
-        &Image::filled(48, 27, Vec4::ZERO),
-        ExrPrecision::Half,
-    )
-    .unwrap();
+    let dark = filled_exr(dir.path(), "dark.exr", (48, 27), Vec4::ZERO);
     let dark = dark.to_str().unwrap();
     let out = dir.path().join("second");
     let copy = format!("copy 1 frame=0.5:{reference}");
@@ -244,8 +247,7 @@ fn candidates_are_measured_beside_the_methods_with_their_flicker() {
     let output = study(&format!("gone=1:{reference},{}", missing.display()));
     assert_bad_input(&output, "candidate \"gone\"");
     assert!(String::from_utf8_lossy(&output.stderr).contains("missing.exr"));
-    let small = dir.path().join("small.exr");
-    write_exr(&small, &Image::filled(4, 4, Vec4::ONE), ExrPrecision::Float).unwrap();
+    let small = filled_exr(dir.path(), "small.exr", (4, 4), Vec4::ONE);
     let output = study(&format!("small=1:{}", small.display()));
     assert_bad_input(&output, "small.exr");
     assert!(String::from_utf8_lossy(&output.stderr).contains("4x4"));
@@ -490,34 +492,21 @@ fn bad_input_stops_the_study_with_one_line() {
     let junk = dir.path().join("junk.exr");
     std::fs::write(&junk, b"not an exr").unwrap();
     assert_bad_input(&study(&["--reference", junk.to_str().unwrap()]), "junk.exr");
-    let small = dir.path().join("small.exr");
-    write_exr(&small, &Image::filled(4, 4, Vec4::ONE), ExrPrecision::Float).unwrap();
+    let small = filled_exr(dir.path(), "small.exr", (4, 4), Vec4::ONE);
     let output = study(&["--reference", small.to_str().unwrap()]);
     assert_bad_input(&output, "small.exr");
     assert!(String::from_utf8_lossy(&output.stderr).contains("4x4"));
     assert_bad_input(&study(&["--reference-spp", "0"]), "--reference-spp");
     // Nothing to measure: a reference in umbra everywhere has no
     // penumbra; a mask over everything leaves no lit pixel.
-    let dark = dir.path().join("dark.exr");
-    write_exr(
-        &dark,
-        &Image::filled(48, 27, Vec4::ZERO),
-        ExrPrecision::Half,
-    )
-    .unwrap();
+    let dark = filled_exr(dir.path(), "dark.exr", (48, 27), Vec4::ZERO);
     let dark_arg = dark.to_str().unwrap();
     let output = study(&["--reference", dark_arg]);
     assert_bad_input(
         &output,
         "dark.exr: the reference leaves no penumbra pixel to measure",
     );
-    let everything = dir.path().join("everything.exr");
-    write_exr(
-        &everything,
-        &Image::filled(48, 27, Vec4::ONE),
-        ExrPrecision::Half,
-    )
-    .unwrap();
+    let everything = filled_exr(dir.path(), "everything.exr", (48, 27), Vec4::ONE);
     let output = study(&[
         "--reference",
         dark_arg,
