@@ -965,6 +965,11 @@ fn city_light_mesh_frames_with_64_lamps_match_the_cpu() {
     assert_backends_agree_within(&city, "0..2", &wide, LoopBudget::MayRunOut);
     let every_lamp = [&wide[..], &["--penumbra", "blocker", "--faint-lamps", "0"]].concat();
     assert_backends_agree_within(&city, "0..2", &every_lamp, LoopBudget::MayRunOut);
+    // The courtyard's three lamps fit every adapter's budget with none
+    // faint: the coverage pass keeps them all without weighing them.
+    let courtyard = ["--method", "lmm1", "--width", "48", "--height", "27"];
+    let every_lamp = [&courtyard[..], &["--faint-lamps", "0"]].concat();
+    assert_backends_agree(&sample("courtyard.gltf"), "0", &every_lamp);
 }
 
 /// The courtyard by LMM1 at 64×36 with h = 0.1 m.

@@ -126,21 +126,17 @@ impl LightMesh {
     ) -> Result<Demand, LightMeshError> {
         let words = self.masks().words();
         let mut reach = vec![0; points.len() * words];
-        reach
-            .par_chunks_mut(words)
-            .zip(points)
-            .for_each(|(point_reach, point)| reaching_lights(point, lights, point_reach));
-        let lamps = wide_ball::lamps(lights.lights(), words);
         let mut faint = vec![0; points.len() * words];
+        let lamps = wide_ball::lamps(lights.lights(), words);
         let parts = self.faint_budget();
-        if parts > 0 {
-            (faint.par_chunks_mut(words))
-                .zip(points.par_iter().zip(reach.par_chunks(words)))
-                .for_each_init(FaintScratch::default, |scratch, (faint, (point, reach))| {
-                    let at = PointLanes::new(point);
-                    faint::mark(lights, &at, (reach, &lamps), parts, scratch, faint);
-                });
-        }
+        (reach.par_chunks_mut(words))
+            .zip(faint.par_chunks_mut(words))
+            .zip(points)
+            .for_each_init(FaintScratch::default, |scratch, ((reach, faint), point)| {
+                let at = PointLanes::new(point);
+                reaching_lights(&at, lights, reach);
+                faint::mark(lights, &at, (reach, &lamps), parts, scratch, faint);
+            });
 
         let table_bytes = BRICK_NODES * words * std::mem::size_of::<u64>();
         let brick_limit = self.memory_limit / table_bytes;
@@ -216,11 +212,10 @@ impl LightMesh {
 }
 
 /// Sets bit i of `words` when light i can reach `point`.
-fn reaching_lights(point: &ShadingPoint, lights: &LightLanes, words: &mut [u64]) {
+fn reaching_lights(at: &PointLanes, lights: &LightLanes, words: &mut [u64]) {
     words.fill(0);
-    let at = PointLanes::new(point);
     for block in 0..lights.blocks() {
-        let lanes = u64::from(lights.reaching(&at, block));
+        let lanes = u64::from(lights.reaching(at, block));
         let first = block * LANES;
         words[first / 64] |= lanes << (first % 64);
     }

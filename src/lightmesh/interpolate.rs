@@ -199,7 +199,6 @@ impl LightMesh {
             sight,
         } = set;
         let (all, any) = (&sight.all, &sight.any);
-        let at = PointLanes::new(point);
         // The lamps the point's own set agrees on but its wide set does
         // not: it lies in their penumbra, beyond the set's reach.
         wide.look(
@@ -210,11 +209,12 @@ impl LightMesh {
         );
         let wide = &*wide;
 
-        // Where the blocker's rays start, the same for every light.
-        let origin = offset_ray_origin(point.position, point.geometric_normal);
         // Omega eight lights at a time, for the blocks where some node sees
         // a light or the wide set disagrees on it; the sum runs in light
         // order.
+        let at = PointLanes::new(point);
+        // Where the blocker's rays start, the same for every light.
+        let origin = offset_ray_origin(point.position, point.geometric_normal);
         for (word, &lit) in any.iter().enumerate() {
             let lit = lit | wide.mixed(word);
             for block_in_word in 0..64 / LANES {

@@ -41,7 +41,7 @@ fn mark_refined_lamps(point: ShadePoint, base: u32) {
     var rule = FaintRule(0u, FAINT_NONE);
     var buckets: array<u32, FAINT_LAST_BUCKET + 1u>;
     // The brightest, the buckets, then the lamps kept: one loop, so Omega
-    // is inlined once. Without a budget every lamp is kept.
+    // is inlined once. Without a budget every lamp is kept, unweighed.
     for (var round = select(0u, 2u, parts == 0u); round < 3u; round++) {
         if round == 2u && parts != 0u {
             rule.first_faint = first_faint_bucket(buckets, parts);
@@ -52,6 +52,10 @@ fn mark_refined_lamps(point: ShadePoint, base: u32) {
             while lamps != 0u {
                 let bit = firstTrailingBit(lamps);
                 lamps &= lamps - 1u;
+                if parts == 0u {
+                    refined |= 1u << bit;
+                    continue;
+                }
                 let weight = faint_weight(omega(point, lights[word * 32u + bit]));
                 let exponent = weight_exponent(weight);
                 if round == 0u {
