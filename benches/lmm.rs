@@ -21,7 +21,10 @@
 //! advantage (issue 34's cold-frame figure), which the full run leaves
 //! out for its time. `LMANIM_BENCH_BACKEND=gpu`
 //! runs the matrix on the GPU backend (the adapter is printed: a software
-//! one's timings say nothing of a GPU's).
+//! one's timings say nothing of a GPU's). `LMANIM_BENCH_SCENES=DIR` keeps
+//! the generated cities in DIR, for timing one frame with `lmanim` itself
+//! (`perf stat` counts its CPU time, which a busy machine disturbs less
+//! than the wall clock).
 
 use std::path::Path;
 use std::time::Instant;
@@ -48,6 +51,8 @@ fn main() {
         })
         .collect();
     let dir = tempfile::tempdir().expect("temporary directory");
+    let kept = std::env::var_os("LMANIM_BENCH_SCENES").map(std::path::PathBuf::from);
+    let dir = kept.as_deref().unwrap_or(dir.path());
     let kind = match std::env::var("LMANIM_BENCH_BACKEND").as_deref() {
         Ok("gpu") => lmanim::settings::BackendKind::Gpu,
         Ok("cpu") | Err(_) => lmanim::settings::BackendKind::Cpu,
@@ -71,7 +76,7 @@ fn main() {
         None => vec![1, 4, 16, 64],
     };
     for lamps in lamp_counts {
-        let path = dir.path().join(format!("city{lamps}.glb"));
+        let path = dir.join(format!("city{lamps}.glb"));
         city_block(&CityParams {
             lamps,
             ..CityParams::default()
@@ -176,7 +181,7 @@ fn main() {
     }
 
     if only_lamps.is_none_or(|lamps| lamps == 64) {
-        let path = dir.path().join("city64-flying.glb");
+        let path = dir.join("city64-flying.glb");
         city_block(&CityParams {
             lamps: 64,
             flythrough: true,
@@ -223,7 +228,7 @@ fn main() {
     println!();
     println!("| kI | mean candidates (steps 1-2) | mean p2n tests (step 3) | mean interpolation set | paper's mean tests | half-ball volume |");
     println!("|---|---|---|---|---|---|");
-    let path = dir.path().join("city16.glb");
+    let path = dir.join("city16.glb");
     for (ki, paper) in [(2.1f32, 16.5), (2.5, 30.4), (3.0, 53.4)] {
         let mut settings = Settings {
             width: 854,

@@ -8,7 +8,7 @@ use glam::IVec3;
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
-use super::faint::{self, FaintScratch};
+use super::faint::LampTerms;
 use super::masks::{parity, split, BRICK_NODES};
 use super::wide_ball::{self, WideBall};
 use super::{LightMesh, LightMeshError};
@@ -110,6 +110,46 @@ impl BrickTables {
     }
 }
 
+/// One kind of walk (the half-ball, or the wide set) from point to point,
+/// remembering what it last asked of the tables: neighbouring points often
+/// walk the very same nodes for the same lights, and the tables only OR,
+/// so asking again would change nothing.
+struct Walk {
+    nodes: Vec<IVec3>,
+    asked: Vec<IVec3>,
+    lights_asked: Vec<u64>,
+}
+
+impl Walk {
+    fn new(words: usize) -> Walk {
+        Walk {
+            nodes: Vec::new(),
+            asked: Vec::new(),
+            lights_asked: vec![0; words],
+        }
+    }
+
+    /// The point's nodes go here.
+    fn start(&mut self) -> &mut Vec<IVec3> {
+        self.nodes.clear();
+        &mut self.nodes
+    }
+
+    /// Needs `lights` at the nodes walked, unless the last walk asked for
+    /// them (or more) at the same nodes.
+    fn need(&mut self, tables: &mut BrickTables, lights: &[u64]) {
+        let asked = |(&light, &asked): (&u64, &u64)| light & !asked == 0;
+        if self.nodes == self.asked && lights.iter().zip(&self.lights_asked).all(asked) {
+            return;
+        }
+        for &node in &self.nodes {
+            tables.need(node, lights);
+        }
+        std::mem::swap(&mut self.nodes, &mut self.asked);
+        self.lights_asked.copy_from_slice(lights);
+    }
+}
+
 impl LightMesh {
     /// What `points` need: reaching lights per point and needed bits per
     /// node, in bricks: each point's half-ball for its lights and, with
@@ -129,13 +169,14 @@ impl LightMesh {
         let mut faint = vec![0; points.len() * words];
         let lamps = wide_ball::lamps(lights.lights(), words);
         let parts = self.faint_budget();
+        // The lamps' terms are asked for only where some lamp can be faint.
+        let termed = (parts != 0).then_some(&lamps[..]);
         (reach.par_chunks_mut(words))
             .zip(faint.par_chunks_mut(words))
             .zip(points)
-            .for_each_init(FaintScratch::default, |scratch, ((reach, faint), point)| {
-                let at = PointLanes::new(point);
-                reaching_lights(&at, lights, reach);
-                faint::mark(lights, &at, (reach, &lamps), parts, scratch, faint);
+            .for_each_init(LampTerms::default, |terms, ((reach, faint), point)| {
+                reaching_lights(&PointLanes::new(point), lights, (reach, termed), terms);
+                terms.mark(parts, faint);
             });
 
         let table_bytes = BRICK_NODES * words * std::mem::size_of::<u64>();
@@ -149,23 +190,18 @@ impl LightMesh {
             .try_fold(
                 || BrickTables::new(words),
                 |mut tables, ((chunk, chunk_reach), chunk_faint)| {
-                    let mut nodes = Vec::new();
+                    let mut half_ball = Walk::new(words);
+                    let mut wide_set = Walk::new(words);
                     let mut lamps_reached = vec![0; words];
                     let per_point = chunk_reach.chunks(words).zip(chunk_faint.chunks(words));
                     for (point, (point_reach, point_faint)) in chunk.iter().zip(per_point) {
                         if point_reach.iter().all(|&word| word == 0) {
                             continue;
                         }
-                        nodes.clear();
-                        self.lattice.half_ball(
-                            point.position,
-                            point.geometric_normal,
-                            self.radius(),
-                            &mut nodes,
-                        );
-                        for &node in &nodes {
-                            tables.need(node, point_reach);
-                        }
+                        let (p, n) = (point.position, point.geometric_normal);
+                        let nodes = half_ball.start();
+                        self.lattice.half_ball(p, n, self.radius(), nodes);
+                        half_ball.need(&mut tables, point_reach);
                         let Some(ball) = &wide else {
                             continue;
                         };
@@ -178,11 +214,8 @@ impl LightMesh {
                         if lamps_reached.iter().all(|&word| word == 0) {
                             continue;
                         }
-                        nodes.clear();
-                        ball.nodes(point.position, point.geometric_normal, &mut nodes);
-                        for &node in &nodes {
-                            tables.need(node, &lamps_reached);
-                        }
+                        ball.nodes(p, n, wide_set.start());
+                        wide_set.need(&mut tables, &lamps_reached);
                     }
                     match tables.bricks.len() {
                         count if count > brick_limit => Err(too_large(count)),
@@ -211,13 +244,28 @@ impl LightMesh {
     }
 }
 
-/// Sets bit i of `words` when light i can reach `point`.
-fn reaching_lights(at: &PointLanes, lights: &LightLanes, words: &mut [u64]) {
-    words.fill(0);
+/// Sets bit i of `reach` when light i can reach the point `at`, and
+/// gathers into `terms` those of the lights among them that are `lamps`
+/// (the same layout) where those are asked for: one arrival of each block
+/// of lights serves both, the BRDF evaluated only for blocks with a lamp.
+fn reaching_lights(
+    at: &PointLanes,
+    lights: &LightLanes,
+    (reach, lamps): (&mut [u64], Option<&[u64]>),
+    terms: &mut LampTerms,
+) {
+    reach.fill(0);
+    terms.clear();
     for block in 0..lights.blocks() {
-        let lanes = u64::from(lights.reaching(at, block));
+        let arrival = lights.arrival(at, block);
         let first = block * LANES;
-        words[first / 64] |= lanes << (first % 64);
+        let (word, shift) = (first / 64, first % 64);
+        let lanes = arrival.reaching();
+        reach[word] |= u64::from(lanes) << shift;
+        let lamp_lanes = lamps.map_or(0, |lamps| lanes & (lamps[word] >> shift) as u8);
+        if lamp_lanes != 0 {
+            terms.add(first, lamp_lanes, &arrival.omega(at));
+        }
     }
 }
 

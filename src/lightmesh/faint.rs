@@ -33,7 +33,7 @@
 //! may flush those) take no part and are never faint.
 
 use crate::bits::set_bits;
-use crate::render::omega::{LightLanes, PointLanes, LANES};
+use crate::render::omega::OmegaBlock;
 
 /// Buckets 0 to `LAST_BUCKET`: lamps 2^24 times fainter than the brightest
 /// and beyond share the last.
@@ -122,55 +122,50 @@ impl FaintLamps {
     }
 }
 
-/// One thread's working space for [`mark`]: the terms of the point at
-/// hand's lamps.
+/// The terms of one point's lamps, gathered a block of lights at a time
+/// as demand evaluates them ([`LampTerms::add`]), then sorted into faint
+/// and kept ([`LampTerms::mark`]). A lamp's term is its Omega's largest
+/// channel, as formula (2) will weigh it. One per thread, reused from
+/// point to point.
 #[derive(Default)]
-pub struct FaintScratch {
+pub struct LampTerms {
     terms: Vec<(usize, f32)>,
 }
 
-/// Sets in `faint` (a bit per light, 64 to a word) the faint lamps among
-/// the lights of `reach` that are `lamps` (the same layout) at the point
-/// `at`, under the budget of `parts` ([`budget_parts`]). A lamp's term is
-/// its Omega's largest channel, as formula (2) will weigh it.
-pub fn mark(
-    lights: &LightLanes,
-    at: &PointLanes,
-    (reach, lamps): (&[u64], &[u64]),
-    parts: u32,
-    scratch: &mut FaintScratch,
-    faint: &mut [u64],
-) {
-    faint.fill(0);
-    if parts == 0 {
-        return;
+impl LampTerms {
+    /// Ready for the next point.
+    pub fn clear(&mut self) {
+        self.terms.clear();
     }
-    let terms = &mut scratch.terms;
-    terms.clear();
-    for (word, (&reach, &lamps)) in reach.iter().zip(lamps).enumerate() {
-        let bits = reach & lamps;
-        for block_in_word in 0..64 / LANES {
-            let first = block_in_word * LANES;
-            let lanes = (bits >> first) as u8;
-            if lanes == 0 {
-                continue;
-            }
-            let omega = lights.omega(at, word * 64 / LANES + block_in_word);
-            for lane in set_bits((lanes & omega.reaching).into()) {
-                terms.push((word * 64 + first + lane, omega.get(lane).max_element()));
-            }
+
+    /// Adds the lamps of `lanes` (a bit per lane of the block whose first
+    /// light is `first`) that bring the point light, with their terms
+    /// from `omega`.
+    #[inline]
+    pub fn add(&mut self, first: usize, lanes: u8, omega: &OmegaBlock) {
+        for lane in set_bits((lanes & omega.reaching).into()) {
+            (self.terms).push((first + lane, omega.get(lane).max_element()));
         }
     }
-    let brightest = terms.iter().map(|&(_, term)| exponent(term)).max();
-    let mut buckets = FaintLamps::brightest(brightest.unwrap_or(0));
-    terms.iter().for_each(|&(_, term)| buckets.add(term));
-    let first_faint = buckets.faintest_kept(parts);
-    for &(light, term) in terms.iter() {
-        if buckets
-            .bucket(term)
-            .is_some_and(|bucket| bucket >= first_faint)
-        {
-            faint[light / 64] |= 1 << (light % 64);
+
+    /// Sets in `faint` (a bit per light, 64 to a word) the faint lamps
+    /// among those added, under the budget of `parts` ([`budget_parts`]).
+    pub fn mark(&self, parts: u32, faint: &mut [u64]) {
+        faint.fill(0);
+        if parts == 0 {
+            return;
+        }
+        let brightest = self.terms.iter().map(|&(_, term)| exponent(term)).max();
+        let mut buckets = FaintLamps::brightest(brightest.unwrap_or(0));
+        self.terms.iter().for_each(|&(_, term)| buckets.add(term));
+        let first_faint = buckets.faintest_kept(parts);
+        for &(light, term) in &self.terms {
+            if buckets
+                .bucket(term)
+                .is_some_and(|bucket| bucket >= first_faint)
+            {
+                faint[light / 64] |= 1 << (light % 64);
+            }
         }
     }
 }

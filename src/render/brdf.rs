@@ -8,7 +8,7 @@ use std::f32::consts::PI;
 use glam::Vec3;
 use wide::f32x8;
 
-use super::lanes::{dot, splat3, Lanes3};
+use super::lanes::{dot, each3, splat3, Lanes3};
 use super::material::SurfaceMaterial;
 
 /// Schlick's approximation of the Fresnel weight `(1 − cos)^5`.
@@ -104,11 +104,11 @@ impl PointBrdf {
         }
         let (n, v) = (splat3(self.n), splat3(self.v));
         let n_dot_l = dot(n, l);
-        let half = [0, 1, 2].map(|axis| v[axis] + l[axis]);
+        let half = each3(|axis| v[axis] + l[axis]);
         let half_recip = one / dot(half, half).sqrt();
         // `normalize_or_zero`: a half vector of no length reflects nothing.
         let has_half = half_recip.simd_lt(f32x8::splat(f32::INFINITY)) & half_recip.simd_gt(zero);
-        let h = half.map(|component| component * half_recip);
+        let h = each3(|axis| half[axis] * half_recip);
         let n_dot_h = dot(n, h).max(zero);
         let v_dot_h = dot(v, h).max(zero).min(one);
 
@@ -128,7 +128,7 @@ impl PointBrdf {
         let f0 = f32x8::splat(self.dielectric_f0);
         let dielectric_fresnel = f0 + (f32x8::splat(self.specular) - f0) * fresnel;
         let reflects = n_dot_l.simd_gt(zero) & has_half;
-        [0, 1, 2].map(|channel| {
+        each3(|channel| {
             let dielectric = f32x8::splat(self.diffuse[channel]) * (one - dielectric_fresnel)
                 + specular * dielectric_fresnel;
             let value = if self.metallic == 0.0 {

@@ -14,7 +14,7 @@ use glam::Vec3;
 use wide::f32x8;
 
 use super::brdf::PointBrdf;
-use super::lanes::{dot, splat3, Lanes3};
+use super::lanes::{dot, each3, splat3, Lanes3};
 use super::light::{LightSource, RenderLight};
 use super::surface::ShadingPoint;
 
@@ -92,36 +92,30 @@ impl LightLanes {
     /// it of every point and light.
     #[inline]
     pub fn reaching(&self, point: &PointLanes, block: usize) -> u8 {
-        self.arrival(point, block).reaches.to_bitmask() as u8
+        self.arrival(point, block).reaching()
     }
 
     /// Omega of the lights of `block` at the point.
     #[inline]
     pub fn omega(&self, point: &PointLanes, block: usize) -> OmegaBlock {
-        let zero = f32x8::splat(0.0);
-        let arrival = self.arrival(point, block);
-        let reflectance = point.brdf.evaluate_lanes(arrival.direction);
-        let value = [0, 1, 2].map(|c| reflectance[c] * arrival.irradiance[c] * arrival.cos_theta);
-        let brings_light = arrival.reaches & value[0].max(value[1]).max(value[2]).simd_gt(zero);
-        OmegaBlock {
-            value: value.map(|channel| brings_light.select(channel, zero).to_array()),
-            reaching: brings_light.to_bitmask() as u8,
-        }
+        self.arrival(point, block).omega(point)
     }
 
     /// What the lights of `block` send towards the point, as
-    /// `RenderLight::incidence` and `ShadingPoint::reaching` compute it.
-    /// Always inlined: returned out of line, its eight-lane struct went
-    /// back through memory and cost a fifth of the lanes' time.
+    /// `RenderLight::incidence` and `ShadingPoint::reaching` compute it:
+    /// [`LightLanes::reaching`] and [`LightLanes::omega`] from one
+    /// evaluation, for the light-mesh demand that asks for both. Always
+    /// inlined: returned out of line, its eight-lane struct went back
+    /// through memory and cost a fifth of the lanes' time.
     #[inline(always)]
-    fn arrival(&self, point: &PointLanes, block: usize) -> Arrival {
+    pub fn arrival(&self, point: &PointLanes, block: usize) -> Arrival {
         let light = &self.blocks[block];
         let zero = f32x8::splat(0.0);
         let one = f32x8::splat(1.0);
 
         // Towards the light and the inverse-square falloff with glTF's
         // range window.
-        let to_light = [0, 1, 2].map(|axis| {
+        let to_light = each3(|axis| {
             light.directional.select(
                 light.origin[axis],
                 light.origin[axis] - point.position[axis],
@@ -132,7 +126,7 @@ impl LightLanes {
         let window = (one - ratio * ratio).max(zero).min(one);
         let window = window * window;
         let length = distance_squared.sqrt();
-        let direction = to_light.map(|component| component / length);
+        let direction = each3(|axis| to_light[axis] / length);
         // glTF's spot falloff, a squared smooth ramp between the cones (a
         // hard edge where they coincide).
         let cos_angle = -dot(direction, light.axis);
@@ -144,7 +138,7 @@ impl LightLanes {
             ramp * ramp,
         );
         let falloff = window / distance_squared * cone;
-        let irradiance = light.power.map(|power| power * falloff);
+        let irradiance = each3(|c| light.power[c] * falloff);
 
         let cos_theta = dot(point.shading_normal, direction);
         let reaches = distance_squared.simd_gt(zero)
@@ -233,7 +227,7 @@ impl From<&RenderLight> for OmegaLight {
 }
 
 /// Light arriving at a point from eight lights, visibility aside.
-struct Arrival {
+pub struct Arrival {
     /// Unit directions towards the lights.
     direction: Lanes3,
     /// Irradiance on a surface facing each light.
@@ -242,6 +236,28 @@ struct Arrival {
     cos_theta: f32x8,
     /// All bits set where the light reaches the point.
     reaches: f32x8,
+}
+
+impl Arrival {
+    /// Bit per lane: the light can send something to the point
+    /// ([`LightLanes::reaching`]).
+    #[inline(always)]
+    pub fn reaching(&self) -> u8 {
+        self.reaches.to_bitmask() as u8
+    }
+
+    /// Omega of the eight lights at `point`, the point this arrived at.
+    #[inline(always)]
+    pub fn omega(&self, point: &PointLanes) -> OmegaBlock {
+        let zero = f32x8::splat(0.0);
+        let reflectance = point.brdf.evaluate_lanes(self.direction);
+        let value = each3(|c| reflectance[c] * self.irradiance[c] * self.cos_theta);
+        let brings_light = self.reaches & value[0].max(value[1]).max(value[2]).simd_gt(zero);
+        OmegaBlock {
+            value: each3(|c| brings_light.select(value[c], zero).to_array()),
+            reaching: brings_light.to_bitmask() as u8,
+        }
+    }
 }
 
 /// The per-point inputs of [`LightLanes::omega`], prepared once.
