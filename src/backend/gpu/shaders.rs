@@ -14,6 +14,18 @@ pub enum Arithmetic {
     PlainF32,
 }
 
+impl Arithmetic {
+    pub const ALL: [Arithmetic; 2] = [Arithmetic::ExactF64, Arithmetic::PlainF32];
+
+    /// What naga must allow to validate a module with this arithmetic.
+    pub fn capabilities(self) -> naga::valid::Capabilities {
+        match self {
+            Arithmetic::ExactF64 => naga::valid::Capabilities::FLOAT64,
+            Arithmetic::PlainF32 => naga::valid::Capabilities::empty(),
+        }
+    }
+}
+
 /// The compute entry points: camera rays, the two ray queries, shading
 /// points, formula (1), formula (2) with its coverage of the points and
 /// the gathering of those it does not cover, the Whitted recursion's rays and their
@@ -259,6 +271,9 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
 }
 
 #[cfg(test)]
+mod f64_work;
+
+#[cfg(test)]
 mod tests {
     use super::*;
 
@@ -268,15 +283,15 @@ mod tests {
     #[test]
     fn every_module_validates() {
         for entry in Entry::ALL {
-            for (arithmetic, capabilities) in [
-                (Arithmetic::ExactF64, naga::valid::Capabilities::FLOAT64),
-                (Arithmetic::PlainF32, naga::valid::Capabilities::empty()),
-            ] {
+            for arithmetic in Arithmetic::ALL {
                 let module = naga::front::wgsl::parse_str(&source(entry, arithmetic))
                     .unwrap_or_else(|e| panic!("{entry:?} {arithmetic:?}: {e}"));
-                naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
-                    .validate(&module)
-                    .unwrap_or_else(|e| panic!("{entry:?} {arithmetic:?}: {e:?}"));
+                naga::valid::Validator::new(
+                    naga::valid::ValidationFlags::all(),
+                    arithmetic.capabilities(),
+                )
+                .validate(&module)
+                .unwrap_or_else(|e| panic!("{entry:?} {arithmetic:?}: {e:?}"));
                 assert!(module.entry_points.iter().any(|e| e.name == entry.name()));
             }
         }
