@@ -265,8 +265,8 @@ fn print_f64_work_per_traversal_step_and_triangle_test() {
     }
 }
 
-/// The helpers' own cost, by hand from `exact_f64.wgsl`: what the pinned
-/// figures below are made of.
+/// The helpers' own cost, by hand from `product_f64.wgsl` and
+/// `exact_f64.wgsl`: what the pinned figures below are made of.
 #[test]
 fn each_f64_helper_costs_what_its_wgsl_says() {
     let analysed = Analysed::tracing(Arithmetic::ExactF64);
@@ -285,6 +285,9 @@ fn each_f64_helper_costs_what_its_wgsl_says() {
         analysed.work_of("difference_of_products"),
         work(4, 1, 1, 2, 0, 0)
     );
+    let uncontracted = Analysed::tracing(Arithmetic::ExactUncontracted);
+    assert_eq!(uncontracted.work_of("mul"), F64Work::NONE);
+    assert_eq!(uncontracted.work_of("div"), analysed.work_of("div"));
 }
 
 /// The totals per function, pinned: more f64 work on a traced path
@@ -300,5 +303,9 @@ fn f64_work_per_traversal_step_and_triangle_test_is_pinned() {
     // enter_child, enter_box, intersect_triangle, difference_of_products,
     // watertight_ray, traversal_ray, to_object_vector.
     assert_eq!(totals(Arithmetic::ExactF64), [0, 0, 112, 8, 12, 12, 12]);
+    assert_eq!(
+        totals(Arithmetic::ExactUncontracted),
+        [0, 0, 28, 8, 12, 12, 0]
+    );
     assert_eq!(totals(Arithmetic::PlainF32), [0; 7]);
 }
