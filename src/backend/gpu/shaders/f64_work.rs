@@ -5,7 +5,8 @@
 //! to 1/64 of f32's rate (Metal has none), so these figures are what the
 //! CPU's rounding costs there; the tests pin them, so a change that adds
 //! f64 work to a hot path fails here, and `cargo test --lib f64_work --
-//! --nocapture` prints the table BENCHMARKS.md quotes.
+//! --nocapture` prints the tables BENCHMARKS.md quotes (with each pass's
+//! total over all its code).
 //!
 //! The count is static: each operation in a function's code counts once,
 //! and each call counts its callee's work once, whether it stands in a
@@ -105,7 +106,12 @@ impl Analysed {
     /// The tracing passes' module (closest hit: the world, the triangle
     /// test and the traversal) as `arithmetic` assembles it.
     fn tracing(arithmetic: Arithmetic) -> Analysed {
-        let module = naga::front::wgsl::parse_str(&source(Entry::ClosestHit, arithmetic))
+        Analysed::pass(Entry::ClosestHit, arithmetic)
+    }
+
+    /// `entry`'s module as `arithmetic` assembles it.
+    fn pass(entry: Entry, arithmetic: Arithmetic) -> Analysed {
+        let module = naga::front::wgsl::parse_str(&source(entry, arithmetic))
             .unwrap_or_else(|e| panic!("{arithmetic:?}: {e}"));
         let info = naga::valid::Validator::new(
             naga::valid::ValidationFlags::all(),
@@ -116,17 +122,23 @@ impl Analysed {
         Analysed { module, info }
     }
 
-    fn function(&self, name: &str) -> naga::Handle<naga::Function> {
-        (self.module.functions.iter())
+    /// The function or entry point named `name`, with its types.
+    fn function(&self, name: &str) -> (&naga::Function, &naga::valid::FunctionInfo) {
+        let function = (self.module.functions.iter())
             .find(|(_, function)| function.name.as_deref() == Some(name))
-            .map(|(handle, _)| handle)
+            .map(|(handle, function)| (function, &self.info[handle]));
+        let entry_point = || {
+            (self.module.entry_points.iter().enumerate())
+                .find(|(_, entry)| entry.name == name)
+                .map(|(at, entry)| (&entry.function, self.info.get_entry_point(at)))
+        };
+        function
+            .or_else(entry_point)
             .unwrap_or_else(|| panic!("no function {name}"))
     }
 
-    /// The f64 work of one call of `function`, its callees' included.
-    fn work(&self, function: naga::Handle<naga::Function>) -> F64Work {
-        let body = &self.module.functions[function];
-        let info = &self.info[function];
+    /// The f64 work of one call of `body`, its callees' included.
+    fn work(&self, body: &naga::Function, info: &naga::valid::FunctionInfo) -> F64Work {
         let lanes = |expression: naga::Handle<Expression>| {
             f64_lanes(info[expression].ty.inner_with(&self.module.types))
         };
@@ -191,11 +203,15 @@ impl Analysed {
             .sum();
         let mut callees = Vec::new();
         calls(&body.body, &mut callees);
-        own + callees.into_iter().map(|callee| self.work(callee)).sum()
+        let callees = callees
+            .into_iter()
+            .map(|callee| self.work(&self.module.functions[callee], &self.info[callee]));
+        own + callees.sum()
     }
 
     fn work_of(&self, name: &str) -> F64Work {
-        self.work(self.function(name))
+        let (body, info) = self.function(name);
+        self.work(body, info)
     }
 }
 
@@ -225,21 +241,21 @@ fn calls(block: &naga::Block, out: &mut Vec<naga::Handle<naga::Function>>) {
 
 /// The functions the table reports, with what one call of each is.
 const REPORTED: [(&str, &str); 7] = [
-    (
-        "enter_child",
-        "traversal step, wide node: one child's box test",
-    ),
-    ("enter_box", "traversal step, binary node: one box test"),
-    ("intersect_triangle", "triangle test"),
+    ("enter_child", "traversal step (wide node): one child's box"),
+    ("enter_box", "traversal step (binary node): one box"),
+    ("intersect_triangle", "triangle test, every path"),
     (
         "difference_of_products",
-        "of which the shared-edge tie path, each of 3",
+        "its tie-breaker, 3 calls where an edge function rounds to 0",
     ),
-    ("watertight_ray", "per ray: the triangle test's setup"),
-    ("traversal_ray", "per ray: the box tests' setup"),
+    ("watertight_ray", "ray setup: the triangle test's shear"),
+    (
+        "traversal_ray",
+        "ray setup: the box tests' inverse direction",
+    ),
     (
         "to_object_vector",
-        "per instance: mapping the ray (loop body, runs 3 times, twice)",
+        "instance setup: a map's loop body (3 runs a map, 2 maps)",
     ),
 ];
 
@@ -252,8 +268,8 @@ fn reported(arithmetic: Arithmetic) -> Vec<F64Work> {
         .collect()
 }
 
-/// Prints the table BENCHMARKS.md quotes: one row per function and
-/// arithmetic.
+/// Prints the tables BENCHMARKS.md quotes: one row per function and
+/// arithmetic, then each pass's total over all its code.
 #[test]
 fn print_f64_work_per_traversal_step_and_triangle_test() {
     println!("| function | one call is | arithmetic | to f64 | from f64 | add/sub | mul | div | sqrt | total |");
@@ -262,6 +278,20 @@ fn print_f64_work_per_traversal_step_and_triangle_test() {
         for ((name, what), work) in REPORTED.iter().zip(reported(arithmetic)) {
             println!("| `{name}` | {what} | {arithmetic:?} | {work} |");
         }
+    }
+    println!();
+    println!("| pass: every code path, each call once | ExactF64 | ExactUncontracted |");
+    println!("|---|---|---|");
+    for entry in Entry::ALL {
+        let total = |arithmetic| {
+            let analysed = Analysed::pass(entry, arithmetic);
+            analysed.work_of(entry.name()).total()
+        };
+        let (before, after) = (
+            total(Arithmetic::ExactF64),
+            total(Arithmetic::ExactUncontracted),
+        );
+        println!("| `{}` | {before} | {after} |", entry.pipeline_name());
     }
 }
 
