@@ -72,8 +72,8 @@ pub struct GpuContext {
     /// Whether the passes go to the driver as our own SPIR-V, every float
     /// operation marked `NoContraction` (Vulkan; see `super::spirv`).
     pub own_spirv: bool,
-    /// Both: then every answer is the CPU's to the bit
-    /// ([`Arithmetic::ExactUncontracted`]).
+    /// Both, which makes the arithmetic `Arithmetic::ExactUncontracted`:
+    /// then every answer is the CPU's to the bit.
     pub exact: bool,
     /// What crossed the bus so far.
     pub traffic: Traffic,
@@ -140,7 +140,7 @@ impl GpuContext {
             limits,
             f64,
             own_spirv,
-            exact: f64 && own_spirv,
+            exact: Arithmetic::for_adapter(f64, own_spirv) == Arithmetic::ExactUncontracted,
             traffic: Traffic::default(),
             pipelines: PipelineCache::none(),
         })

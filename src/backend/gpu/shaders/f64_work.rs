@@ -16,48 +16,47 @@
 use std::fmt;
 use std::ops::Add;
 
-use naga::{BinaryOperator, Expression, MathFunction, Scalar, ScalarKind, TypeInner};
+use naga::{
+    BinaryOperator, Expression, MathFunction, Scalar, ScalarKind, TypeInner, UnaryOperator,
+};
 
 use super::{source, Arithmetic, Entry};
 
-/// f64 operations, by kind; vector operations count per component.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-struct F64Work {
-    to_f64: u32,
-    from_f64: u32,
+/// The kinds of f64 operation counted, in the table's column order.
+#[derive(Clone, Copy, Debug)]
+enum F64Op {
+    ToF64,
+    FromF64,
     /// Additions, subtractions and negations.
-    add_sub: u32,
-    mul: u32,
-    div: u32,
-    sqrt: u32,
+    AddSub,
+    Mul,
+    Div,
+    Sqrt,
 }
 
+/// f64 operations, counted per [`F64Op`] (indexed by it).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct F64Work([u32; 6]);
+
 impl F64Work {
-    const NONE: F64Work = F64Work {
-        to_f64: 0,
-        from_f64: 0,
-        add_sub: 0,
-        mul: 0,
-        div: 0,
-        sqrt: 0,
-    };
+    const NONE: F64Work = F64Work([0; 6]);
+
+    /// `lanes` operations of kind `op`.
+    fn of(op: F64Op, lanes: u32) -> F64Work {
+        let mut counts = [0; 6];
+        counts[op as usize] = lanes;
+        F64Work(counts)
+    }
 
     fn total(self) -> u32 {
-        self.to_f64 + self.from_f64 + self.add_sub + self.mul + self.div + self.sqrt
+        self.0.iter().sum()
     }
 }
 
 impl Add for F64Work {
     type Output = F64Work;
     fn add(self, other: F64Work) -> F64Work {
-        F64Work {
-            to_f64: self.to_f64 + other.to_f64,
-            from_f64: self.from_f64 + other.from_f64,
-            add_sub: self.add_sub + other.add_sub,
-            mul: self.mul + other.mul,
-            div: self.div + other.div,
-            sqrt: self.sqrt + other.sqrt,
-        }
+        F64Work(std::array::from_fn(|op| self.0[op] + other.0[op]))
     }
 }
 
@@ -69,17 +68,10 @@ impl std::iter::Sum for F64Work {
 
 impl fmt::Display for F64Work {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        write!(
-            f,
-            "{} | {} | {} | {} | {} | {} | **{}**",
-            self.to_f64,
-            self.from_f64,
-            self.add_sub,
-            self.mul,
-            self.div,
-            self.sqrt,
-            self.total()
-        )
+        for count in self.0 {
+            write!(f, "{count} | ")?;
+        }
+        write!(f, "**{}**", self.total())
     }
 }
 
@@ -143,62 +135,42 @@ impl Analysed {
             f64_lanes(info[expression].ty.inner_with(&self.module.types))
         };
         let own: F64Work = (body.expressions.iter())
-            .map(|(handle, expression)| match *expression {
-                Expression::As {
-                    expr,
-                    kind: ScalarKind::Float,
-                    convert: Some(8),
-                } if lanes(expr) == 0 => F64Work {
-                    to_f64: lanes(handle),
-                    ..F64Work::NONE
-                },
-                Expression::As {
-                    expr,
-                    convert: Some(width),
-                    ..
-                } if width != 8 => F64Work {
-                    from_f64: lanes(expr),
-                    ..F64Work::NONE
-                },
-                Expression::Binary { op, .. } => {
-                    let n = lanes(handle);
-                    match op {
-                        BinaryOperator::Add | BinaryOperator::Subtract => F64Work {
-                            add_sub: n,
-                            ..F64Work::NONE
-                        },
-                        BinaryOperator::Multiply => F64Work {
-                            mul: n,
-                            ..F64Work::NONE
-                        },
-                        BinaryOperator::Divide => F64Work {
-                            div: n,
-                            ..F64Work::NONE
-                        },
+            .filter_map(|(handle, expression)| {
+                let op = match *expression {
+                    Expression::As {
+                        expr,
+                        kind: ScalarKind::Float,
+                        convert: Some(8),
+                    } if lanes(expr) == 0 => F64Op::ToF64,
+                    Expression::As {
+                        expr,
+                        convert: Some(width),
+                        ..
+                    } if width != 8 => return Some(F64Work::of(F64Op::FromF64, lanes(expr))),
+                    Expression::Binary { op, .. } => match op {
+                        BinaryOperator::Add | BinaryOperator::Subtract => F64Op::AddSub,
+                        BinaryOperator::Multiply => F64Op::Mul,
+                        BinaryOperator::Divide => F64Op::Div,
                         _ => {
-                            assert_eq!(n, 0, "an f64 {op:?} this count does not classify");
-                            F64Work::NONE
+                            assert_eq!(lanes(handle), 0, "an f64 {op:?} left uncounted");
+                            return None;
                         }
+                    },
+                    Expression::Unary {
+                        op: UnaryOperator::Negate,
+                        ..
+                    } => F64Op::AddSub,
+                    Expression::Math {
+                        fun: MathFunction::Sqrt,
+                        ..
+                    } => F64Op::Sqrt,
+                    Expression::Math { fun, .. } => {
+                        assert_eq!(lanes(handle), 0, "an f64 {fun:?} left uncounted");
+                        return None;
                     }
-                }
-                Expression::Unary { .. } => F64Work {
-                    add_sub: lanes(handle),
-                    ..F64Work::NONE
-                },
-                Expression::Math { fun, .. } => {
-                    let n = lanes(handle);
-                    match fun {
-                        MathFunction::Sqrt => F64Work {
-                            sqrt: n,
-                            ..F64Work::NONE
-                        },
-                        _ => {
-                            assert_eq!(n, 0, "an f64 {fun:?} this count does not classify");
-                            F64Work::NONE
-                        }
-                    }
-                }
-                _ => F64Work::NONE,
+                    _ => return None,
+                };
+                Some(F64Work::of(op, lanes(handle)))
             })
             .sum();
         let mut callees = Vec::new();
@@ -300,20 +272,17 @@ fn print_f64_work_per_traversal_step_and_triangle_test() {
 #[test]
 fn each_f64_helper_costs_what_its_wgsl_says() {
     let analysed = Analysed::tracing(Arithmetic::ExactF64);
-    let work = |to_f64, from_f64, add_sub, mul, div, sqrt| F64Work {
-        to_f64,
-        from_f64,
-        add_sub,
-        mul,
-        div,
-        sqrt,
-    };
-    assert_eq!(analysed.work_of("mul"), work(2, 1, 0, 1, 0, 0));
-    assert_eq!(analysed.work_of("div"), work(2, 1, 0, 0, 1, 0));
-    assert_eq!(analysed.work_of("root"), work(1, 1, 0, 0, 0, 1));
+    // To f64, from f64, add/sub, mul, div, sqrt.
+    assert_eq!(analysed.work_of("mul"), F64Work([2, 1, 0, 1, 0, 0]));
+    assert_eq!(analysed.work_of("div"), F64Work([2, 1, 0, 0, 1, 0]));
+    assert_eq!(analysed.work_of("root"), F64Work([1, 1, 0, 0, 0, 1]));
     assert_eq!(
         analysed.work_of("difference_of_products"),
-        work(4, 1, 1, 2, 0, 0)
+        F64Work([4, 1, 1, 2, 0, 0])
+    );
+    assert_eq!(
+        analysed.work_of("triangle_normal"),
+        F64Work([12, 3, 11, 12, 1, 1])
     );
     let uncontracted = Analysed::tracing(Arithmetic::ExactUncontracted);
     assert_eq!(uncontracted.work_of("mul"), F64Work::NONE);
