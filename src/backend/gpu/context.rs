@@ -66,13 +66,14 @@ pub struct GpuContext {
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
     pub limits: wgpu::Limits,
-    /// Whether the adapter has f64 in shaders: then products, quotients
-    /// and roots round as on the CPU (see `shaders/exact_f64.wgsl`).
+    /// Whether the adapter has f64 in shaders: then quotients and roots
+    /// round as on the CPU (see `shaders/exact_f64.wgsl`).
     pub f64: bool,
     /// Whether the passes go to the driver as our own SPIR-V, every float
     /// operation marked `NoContraction` (Vulkan; see `super::spirv`).
     pub own_spirv: bool,
-    /// Both: then every answer is the CPU's to the bit.
+    /// Both, which makes the arithmetic `Arithmetic::ExactUncontracted`:
+    /// then every answer is the CPU's to the bit.
     pub exact: bool,
     /// What crossed the bus so far.
     pub traffic: Traffic,
@@ -139,18 +140,16 @@ impl GpuContext {
             limits,
             f64,
             own_spirv,
-            exact: f64 && own_spirv,
+            exact: Arithmetic::for_adapter(f64, own_spirv) == Arithmetic::ExactUncontracted,
             traffic: Traffic::default(),
             pipelines: PipelineCache::none(),
         })
     }
 
-    /// How the shaders round on this adapter (see [`GpuContext::f64`]).
+    /// How the shaders round on this adapter (see [`GpuContext::f64`]
+    /// and [`GpuContext::own_spirv`]).
     pub fn arithmetic(&self) -> Arithmetic {
-        match self.f64 {
-            true => Arithmetic::ExactF64,
-            false => Arithmetic::PlainF32,
-        }
+        Arithmetic::for_adapter(self.f64, self.own_spirv)
     }
 
     /// Makes the pipelines from now on through the driver's cache kept in

@@ -159,8 +159,9 @@ impl GpuBackend {
         }
     }
 
-    /// Whether the adapter rounds as the CPU does (it has f64): then every
-    /// answer and frame is the CPU backend's to the bit.
+    /// Whether the adapter rounds as the CPU does (it has f64 and takes
+    /// our own SPIR-V: `shaders::Arithmetic::ExactUncontracted`): then
+    /// every answer and frame is the CPU backend's to the bit.
     pub fn rounds_as_the_cpu(&self) -> bool {
         self.context.exact
     }

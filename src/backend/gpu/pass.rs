@@ -15,7 +15,7 @@ use super::context::{GpuContext, GpuError};
 use super::contract::{ANSWERS, ITEMS, PARAMS, WORKGROUP};
 use super::recording::Recording;
 use super::scene::GpuScene;
-use super::shaders::{self, Arithmetic, Entry};
+use super::shaders::{self, Entry};
 use super::spirv;
 
 /// Items per dispatch: within the 65535 workgroups a dispatch may have in
@@ -35,10 +35,6 @@ fn shader_module(
     layout: &[wgpu::BindGroupLayoutEntry],
 ) -> wgpu::ShaderModule {
     let arithmetic = context.arithmetic();
-    let capabilities = match arithmetic {
-        Arithmetic::ExactF64 => naga::valid::Capabilities::FLOAT64,
-        Arithmetic::PlainF32 => naga::valid::Capabilities::empty(),
-    };
     let source = shaders::source(entry, arithmetic);
     if !context.own_spirv {
         return context
@@ -49,7 +45,7 @@ fn shader_module(
             });
     }
     let bindings: Vec<u32> = layout.iter().map(|binding| binding.binding).collect();
-    let words = spirv::compile(&source, entry.name(), capabilities, &bindings)
+    let words = spirv::compile(&source, entry.name(), arithmetic.capabilities(), &bindings)
         .unwrap_or_else(|error| panic!("the {} pass does not compile: {error}", entry.name()));
     let descriptor = wgpu::ShaderModuleDescriptorPassthrough {
         label: Some(entry.name()),

@@ -1,17 +1,71 @@
 //! The WGSL of the compute passes, kept in `shaders/` as files of their own
 //! and put together here at build time: WGSL has no includes, so each
 //! entry point's module is the contract's constants
-//! ([`super::contract::prelude`]), the arithmetic prelude, the shared
+//! ([`super::contract::prelude`]), the arithmetic prelude (how products,
+//! then quotients and roots, round: [`Arithmetic`]), the shared
 //! declarations and its own file, concatenated.
 
 use super::contract;
 
-/// How products, quotients and roots round: through f64 where the adapter
-/// has it (as the CPU rounds), else plain f32.
+/// How products, quotients and roots round. The CPU rounds each f32
+/// operation once (Rust never fuses), and makes the watertight test's
+/// tie-breaker and triangle normals in f64; f64 runs at 1/32 to 1/64 of
+/// f32's rate on consumer GPUs, so it is kept to what f32 cannot round as
+/// the CPU does (`shaders/f64_work.rs` counts it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Arithmetic {
+    /// Our own SPIR-V, every float operation marked `NoContraction`
+    /// (Vulkan: [`super::spirv`]), on an adapter with f64: products in
+    /// plain f32, which Vulkan rounds correctly and the decoration keeps
+    /// from fusing; quotients (WGSL allows 2.5 ULP), roots, the
+    /// tie-breaker and normals through f64. Every answer is the CPU's.
+    ExactUncontracted,
+    /// WGSL to the driver (nothing marks a product unfusable) on an
+    /// adapter with f64: products through f64 as well, which most
+    /// compilers do not fuse.
     ExactF64,
+    /// No f64: plain f32, within a few ULPs of the CPU.
     PlainF32,
+}
+
+impl Arithmetic {
+    pub const ALL: [Arithmetic; 3] = [
+        Arithmetic::ExactUncontracted,
+        Arithmetic::ExactF64,
+        Arithmetic::PlainF32,
+    ];
+
+    /// The arithmetic for an adapter that has f64 or not, whose passes
+    /// reach the driver as our own SPIR-V or not.
+    pub fn for_adapter(f64: bool, own_spirv: bool) -> Arithmetic {
+        match (f64, own_spirv) {
+            (true, true) => Arithmetic::ExactUncontracted,
+            (true, false) => Arithmetic::ExactF64,
+            (false, _) => Arithmetic::PlainF32,
+        }
+    }
+
+    /// What naga must allow to validate a module with this arithmetic.
+    pub fn capabilities(self) -> naga::valid::Capabilities {
+        match self {
+            Arithmetic::ExactUncontracted | Arithmetic::ExactF64 => {
+                naga::valid::Capabilities::FLOAT64
+            }
+            Arithmetic::PlainF32 => naga::valid::Capabilities::empty(),
+        }
+    }
+
+    /// The prelude's two files: how products round (`mul`), then
+    /// quotients, roots, the tie-breaker and normals.
+    fn prelude(self) -> [&'static str; 2] {
+        let product_f32 = include_str!("shaders/product_f32.wgsl");
+        let exact_f64 = include_str!("shaders/exact_f64.wgsl");
+        match self {
+            Arithmetic::ExactUncontracted => [product_f32, exact_f64],
+            Arithmetic::ExactF64 => [include_str!("shaders/product_f64.wgsl"), exact_f64],
+            Arithmetic::PlainF32 => [product_f32, include_str!("shaders/exact_f32.wgsl")],
+        }
+    }
 }
 
 /// The compute entry points: camera rays, the two ray queries, shading
@@ -165,10 +219,7 @@ const TRACING: [&str; 3] = [
 
 /// The whole module for `entry` with `arithmetic`.
 pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
-    let prelude = match arithmetic {
-        Arithmetic::ExactF64 => include_str!("shaders/exact_f64.wgsl"),
-        Arithmetic::PlainF32 => include_str!("shaders/exact_f32.wgsl"),
-    };
+    let [products, rest] = arithmetic.prelude();
     let terms: &[&str] = match entry {
         Entry::DirectLight | Entry::LightMesh | Entry::FillSegments => &[LIGHT_SUM],
         Entry::DirectLightLayers | Entry::LightMeshLayers => &[LIGHT_LAYERS],
@@ -248,7 +299,7 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
         ),
     };
     let contract = contract::prelude();
-    [contract.as_str(), prelude, COMMON]
+    [contract.as_str(), products, rest, COMMON]
         .iter()
         .chain(tracing)
         .chain(own)
@@ -257,6 +308,9 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
         .collect::<Vec<_>>()
         .join("\n")
 }
+
+#[cfg(test)]
+mod f64_work;
 
 #[cfg(test)]
 mod tests {
@@ -268,15 +322,15 @@ mod tests {
     #[test]
     fn every_module_validates() {
         for entry in Entry::ALL {
-            for (arithmetic, capabilities) in [
-                (Arithmetic::ExactF64, naga::valid::Capabilities::FLOAT64),
-                (Arithmetic::PlainF32, naga::valid::Capabilities::empty()),
-            ] {
+            for arithmetic in Arithmetic::ALL {
                 let module = naga::front::wgsl::parse_str(&source(entry, arithmetic))
                     .unwrap_or_else(|e| panic!("{entry:?} {arithmetic:?}: {e}"));
-                naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
-                    .validate(&module)
-                    .unwrap_or_else(|e| panic!("{entry:?} {arithmetic:?}: {e:?}"));
+                naga::valid::Validator::new(
+                    naga::valid::ValidationFlags::all(),
+                    arithmetic.capabilities(),
+                )
+                .validate(&module)
+                .unwrap_or_else(|e| panic!("{entry:?} {arithmetic:?}: {e:?}"));
                 assert!(module.entry_points.iter().any(|e| e.name == entry.name()));
             }
         }

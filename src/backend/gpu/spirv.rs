@@ -10,6 +10,10 @@
 //! Vulkan the passes are translated here, with the options wgpu's own
 //! translation uses, the decoration is added to every float arithmetic
 //! result, and the words go to the driver unchanged (wgpu's passthrough).
+//! With the decoration, a plain f32 sum, difference or product rounds
+//! correctly and alone, as the CPU's: the passes translated here take
+//! their products in f32 and keep f64 for quotients and roots
+//! ([`super::shaders::Arithmetic::ExactUncontracted`]).
 
 use naga::back::spv;
 
@@ -183,22 +187,18 @@ mod tests {
     use super::*;
     use crate::backend::gpu::shaders::{source, Arithmetic, Entry};
 
-    /// `entry`'s pass compiled with the bindings its WGSL declares.
-    fn compiled(entry: Entry) -> Vec<u32> {
-        let source = source(entry, Arithmetic::ExactF64);
+    /// `entry`'s pass with `arithmetic`, compiled with the bindings its
+    /// WGSL declares.
+    fn compiled(entry: Entry, arithmetic: Arithmetic) -> Vec<u32> {
+        let source = source(entry, arithmetic);
         let module = naga::front::wgsl::parse_str(&source).expect("parses");
         let bindings: Vec<u32> = module
             .global_variables
             .iter()
             .filter_map(|(_, global)| global.binding.as_ref().map(|binding| binding.binding))
             .collect();
-        compile(
-            &source,
-            entry.name(),
-            naga::valid::Capabilities::FLOAT64,
-            &bindings,
-        )
-        .unwrap_or_else(|error| panic!("{}: {error}", entry.name()))
+        compile(&source, entry.name(), arithmetic.capabilities(), &bindings)
+            .unwrap_or_else(|error| panic!("{} {arithmetic:?}: {error}", entry.name()))
     }
 
     /// The ids marked `NoContraction`, and the float results of `words`.
@@ -214,17 +214,24 @@ mod tests {
         (marked, results)
     }
 
-    /// Every pass compiles, every float operation in it is marked, the
-    /// marks sit before the first type, and naga reads the words back.
+    /// Every pass compiles, with each arithmetic our SPIR-V carries (an
+    /// adapter's with f64 and without), every float operation in it is
+    /// marked, the marks sit before the first type, and naga reads the
+    /// words back.
     #[test]
     fn every_float_operation_of_every_pass_is_marked() {
-        for &entry in Entry::ALL.iter() {
-            let words = compiled(entry);
+        let carried = [true, false].map(|f64| Arithmetic::for_adapter(f64, true));
+        for (arithmetic, entry) in carried
+            .into_iter()
+            .flat_map(|arithmetic| Entry::ALL.map(|entry| (arithmetic, entry)))
+        {
+            let name = format!("{} {arithmetic:?}", entry.name());
+            let words = compiled(entry, arithmetic);
             let (mut marked, mut results) = marked_and_float_results(&words);
-            assert!(!results.is_empty(), "{}: no float operation", entry.name());
+            assert!(!results.is_empty(), "{name}: no float operation");
             marked.sort_unstable();
             results.sort_unstable();
-            assert_eq!(marked, results, "{}", entry.name());
+            assert_eq!(marked, results, "{name}");
             let first_type = instructions(&words)
                 .position(|(opcode, _)| (19..=39).contains(&opcode))
                 .expect("a type");
@@ -234,18 +241,18 @@ mod tests {
                 .map(|(at, _)| at)
                 .last()
                 .expect("a mark");
-            assert!(last_mark < first_type, "{}", entry.name());
+            assert!(last_mark < first_type, "{name}");
             naga::front::spv::parse_u8_slice(
                 bytemuck::cast_slice(&words),
                 &naga::front::spv::Options::default(),
             )
-            .unwrap_or_else(|error| panic!("{}: {error}", entry.name()));
+            .unwrap_or_else(|error| panic!("{name}: {error}"));
         }
     }
 
     #[test]
     fn an_unmarked_module_is_found_out() {
-        let words = compiled(Entry::CameraRays);
+        let words = compiled(Entry::CameraRays, Arithmetic::ExactUncontracted);
         let unmarked: Vec<u32> = instructions(&words)
             .filter(|(opcode, i)| !(*opcode == op::DECORATE && i[2] == NO_CONTRACTION))
             .flat_map(|(_, i)| i.to_vec())

@@ -1,12 +1,10 @@
-// Arithmetic for adapters without f64: plain f32 operations. A compiler
-// may fuse a product into a following add and divide to 2.5 ULP, so rays
-// through shared edges can be decided differently from the CPU (never
-// missed by both neighbours: the edge functions keep their sign
-// symmetry up to one rounding). The adapter's lack of f64 is reported.
-
-fn mul(a: f32, b: f32) -> f32 {
-    return a * b;
-}
+// Quotients, roots, the tie-breaker and normals for adapters without
+// f64, in plain f32 (products come before this file, `product_f32.wgsl`).
+// Division may be 2.5 ULP off and products may fuse where the driver gets
+// WGSL, so rays through shared edges can be decided differently from the
+// CPU (never missed by both neighbours: the edge functions keep their
+// sign symmetry up to one rounding). The adapter's lack of f64 is
+// reported.
 
 fn div(a: f32, b: f32) -> f32 {
     return a / b;

@@ -1,23 +1,23 @@
-// Arithmetic that rounds as the CPU's does, for adapters with f64.
+// Quotients, roots, the watertight test's tie-breaker and triangle
+// normals rounded as the CPU rounds them, through f64, for adapters with
+// it. Products come before this file: `product_f32.wgsl` where every
+// float operation is marked NoContraction, else `product_f64.wgsl`.
 //
-// WGSL lets a compiler fuse `a * b + c` into one FMA and lets division be
-// off by 2.5 ULP. The product of two f32s is exact in f64 and rounds to
-// the f32 product on the way back. That alone does not stop fusing: a
-// compiler may see that the round trip is an f32 product (NVIDIA's does)
-// and fuse that; on Vulkan the SPIR-V marks every float operation
-// NoContraction (`spirv.rs`), which does. Division rounds once in f64,
+// WGSL lets division be off by 2.5 ULP. Division rounds once in f64,
 // then to f32: the CPU's correctly rounded quotient except where the f64
 // quotient lands within 2.5 f64 ULPs of an f32 tie.
-
-fn mul(a: f32, b: f32) -> f32 {
-    return f32(f64(a) * f64(b));
-}
 
 fn div(a: f32, b: f32) -> f32 {
     return f32(f64(a) / f64(b));
 }
 
-// p q - r s with one rounding: the tie-breaker of the watertight test.
+// p q - r s as the CPU's tie-breaker of the watertight test makes it:
+// exact products, their difference rounded to f64, then to f32. That is
+// not always the correctly rounded difference an exact f32 method (FMA
+// and a two-product) would give: with p = q = 1 + 2^-12 and r s = -2^-80
+// the f64 difference lands on an f32 tie and rounds to even, below the
+// true value's nearest f32. So it stays in f64; only a triangle test
+// whose edge function rounds to zero takes it.
 fn difference_of_products(p: f32, q: f32, r: f32, s: f32) -> f32 {
     return f32(f64(p) * f64(q) - f64(r) * f64(s));
 }
