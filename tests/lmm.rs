@@ -520,6 +520,34 @@ fn a_light_mesh_method_without_a_light_mesh_is_an_error_not_a_panic() {
 }
 
 #[test]
+fn a_light_mesh_method_with_every_light_off_renders_as_whitted() {
+    let no_lights = || {
+        let mut scene = lit_floor();
+        scene.lights.clear();
+        scene.nodes.iter_mut().for_each(|node| node.light = None);
+        scene
+    };
+    let lights_off = || {
+        let mut scene = lit_floor();
+        for light in &mut scene.lights {
+            light.intensity = 0.0;
+        }
+        scene
+    };
+    let base = settings(16, 16);
+    for (name, scene) in [
+        ("no light", no_lights as fn() -> SceneDesc),
+        ("lights off", lights_off),
+    ] {
+        let whitted = render(scene(), &base);
+        for method in [Method::Lmm, Method::Lmm1, Method::Auto] {
+            let image = render(scene(), &with_method(base.clone(), method, 0.1, 2.5));
+            assert_eq!(image.pixels, whitted.pixels, "{name}, {method}");
+        }
+    }
+}
+
+#[test]
 fn a_lattice_coarser_than_the_scene_still_renders() {
     let image = render(
         lit_floor(),

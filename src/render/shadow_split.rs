@@ -125,15 +125,24 @@ impl ShadowSplit {
 
     /// The integrators `method` runs in a frame with `lights`: `auto`
     /// runs the light mesh (by LMM1's rule) where some light is soft, and
-    /// formula (1) alone where none is.
+    /// formula (1) alone where none is. A light-mesh frame none of whose
+    /// lights the mesh would shade (every lamp off, or no light at all)
+    /// runs formula (1) alone too: it shades the lights that are on as the
+    /// light-mesh frame would have, and there is no mesh to build.
     pub fn resolve(&self, method: Method, lights: &[RenderLight]) -> FrameMethod {
-        match FrameMethod::forced(method) {
+        let resolved = match FrameMethod::forced(method) {
             Some(forced) => forced,
             None if self.has_class(Shadows::Soft, lights) => FrameMethod::LightMesh {
                 point_to_node_tests: false,
                 lights: MeshLights::Soft,
             },
             None => FrameMethod::FormulaOne,
+        };
+        match resolved {
+            FrameMethod::LightMesh { .. } if !self.uses_light_mesh(resolved, lights) => {
+                FrameMethod::FormulaOne
+            }
+            resolved => resolved,
         }
     }
 
