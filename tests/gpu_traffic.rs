@@ -186,6 +186,24 @@ fn a_light_mesh_frame_waits_for_its_coverage_flags_and_its_band() {
         (steady_work.points_demanded, steady_work.bricks_uploaded),
         (0, 0)
     );
+    // The fill's segments all went to the GPU, and only where points
+    // were not served: each answers the static test, the dynamic one or
+    // both, and `fill_segments` counts each test. The pool took the cold
+    // frame's bricks as new ones.
+    for (stats, gpu) in [(&dolly[0], cold), (&dolly[1], moved), (&still[1], steady)] {
+        let tests = lightmesh(stats).fill_segments;
+        let traced = gpu.segments_traced;
+        assert!(
+            traced <= tests && tests <= 2 * traced,
+            "{gpu:?}, {tests} tests"
+        );
+    }
+    assert!(cold.segments_traced > 0, "{cold:?}");
+    assert_eq!(steady.segments_traced, 0, "{steady:?}");
+    let cold_work = lightmesh(&dolly[0]);
+    assert!(cold_work.bricks_inserted > 0);
+    assert_eq!(cold_work.bricks_inserted, cold_work.bricks_uploaded);
+    assert_eq!(steady_work.bricks_inserted, 0);
     use lmanim::backend::gpu::mask_pool::MaskPool;
     let brick_bytes = MaskPool::slot_bytes(MaskPool::light_words(2)) as u64;
     let bricks = lightmesh(&dolly[0]).bricks_uploaded;

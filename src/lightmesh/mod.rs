@@ -149,6 +149,9 @@ pub struct LightMeshStats {
     /// Bricks copied into the GPU backend's mask pool this frame (new to
     /// it, or edited since their last copy); 0 on the CPU backend.
     pub bricks_uploaded: u64,
+    /// Of those, bricks new to the pool, given a slot this frame; 0 on
+    /// the CPU backend.
+    pub bricks_inserted: u64,
     /// Bricks the GPU's mask pool evicted this frame to stay within
     /// `lightmesh.gpu_memory_mib`.
     pub bricks_evicted: u64,

@@ -80,6 +80,7 @@ impl FillPass {
                 &[(LIGHTS, lights.buffer())],
                 lights.count(),
             )?;
+            context.traffic.traced(batch.len() as u64);
             answers.extend(bits.into_iter().map(|bits| SegmentAnswer {
                 static_blocked: bits & STATIC_BLOCKED != 0,
                 dynamic_tested: bits & DYNAMIC_TESTED != 0,

@@ -209,6 +209,7 @@ impl<'m> LightMeshShading<'m> {
         let bricks: Vec<IVec3> = demand.bricks.iter().map(|brick| brick.brick).collect();
         let upload = (self.pool).admit(context, self.mesh, &bricks, read_slots, p2n)?;
         self.work.bricks_uploaded += upload.bricks;
+        self.work.bricks_inserted += upload.inserted;
         self.work.bricks_evicted += upload.evicted;
         stats.add_stage_time("upload", start.elapsed().as_secs_f64());
         Ok(LevelReach { reach })

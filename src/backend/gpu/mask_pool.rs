@@ -114,7 +114,10 @@ pub struct MaskPool {
 /// What one update uploaded, for the stats.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PoolUpload {
+    /// Bricks copied up (new to the pool, or edited since their copy).
     pub bricks: u64,
+    /// Bricks given a slot: new to the pool.
+    pub inserted: u64,
     pub evicted: u64,
 }
 
@@ -245,6 +248,7 @@ impl MaskPool {
                         (self.allocated - 1) as u32
                     });
                     self.directory_stale = true;
+                    upload.inserted += 1;
                     self.resident.entry(brick).or_insert(Resident {
                         slot,
                         revision: u64::MAX,

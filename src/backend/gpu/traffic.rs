@@ -29,6 +29,7 @@ pub struct Traffic {
     waits: AtomicU64,
     bytes_up: AtomicU64,
     bytes_down: AtomicU64,
+    segments_traced: AtomicU64,
 }
 
 /// One frame's traffic (or a run's, from its first snapshot).
@@ -41,6 +42,9 @@ pub struct GpuTraffic {
     pub bytes_up: u64,
     /// Bytes read back.
     pub bytes_down: u64,
+    /// The light mesh's node-to-light segments the GPU traced for the
+    /// fill (`super::fill`): the fill's work that crossed to the GPU.
+    pub segments_traced: u64,
 }
 
 impl Traffic {
@@ -49,6 +53,7 @@ impl Traffic {
             waits: self.waits.load(Ordering::Relaxed),
             bytes_up: self.bytes_up.load(Ordering::Relaxed),
             bytes_down: self.bytes_down.load(Ordering::Relaxed),
+            segments_traced: self.segments_traced.load(Ordering::Relaxed),
         }
     }
 
@@ -59,6 +64,7 @@ impl Traffic {
             waits: now.waits - before.waits,
             bytes_up: now.bytes_up - before.bytes_up,
             bytes_down: now.bytes_down - before.bytes_down,
+            segments_traced: now.segments_traced - before.segments_traced,
         }
     }
 
@@ -66,6 +72,11 @@ impl Traffic {
     pub fn waited(&self, bytes: u64) {
         self.waits.fetch_add(1, Ordering::Relaxed);
         self.bytes_down.fetch_add(bytes, Ordering::Relaxed);
+    }
+
+    /// Counts `segments` traced for the fill.
+    pub fn traced(&self, segments: u64) {
+        self.segments_traced.fetch_add(segments, Ordering::Relaxed);
     }
 
     fn sent(&self, bytes: u64) {
