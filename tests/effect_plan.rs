@@ -9,7 +9,6 @@ use lmanim::anim::pose::ClipSelection;
 use lmanim::backend::Backend;
 use lmanim::output::{Image, RenderedFrame};
 use lmanim::plan::{Plan, Shadows};
-use lmanim::scene::animation::AnimationClip;
 use lmanim::scene::{LightKind, Material, SceneDesc};
 use lmanim::schedule::{FrameSet, Timeline};
 use lmanim::sequence::Sequence;
@@ -260,10 +259,7 @@ fn yard_with_a_late_car() -> SceneDesc {
         1.0,
     );
     channel.sampler.times = vec![2.0, 3.0];
-    scene.animations.push(AnimationClip {
-        name: Some("drive".into()),
-        channels: vec![channel],
-    });
+    add_clip(&mut scene, "drive", vec![channel]);
     scene.nodes[car].animated = true;
     scene
 }

@@ -41,12 +41,7 @@ fn box_on_a_floor(seconds: f32) -> SceneDesc {
         seconds,
     );
     scene.nodes[camera].animated = true;
-    scene
-        .animations
-        .push(lmanim::scene::animation::AnimationClip {
-            name: Some("dolly".into()),
-            channels: vec![dolly],
-        });
+    add_clip(&mut scene, "dolly", vec![dolly]);
     scene
 }
 
@@ -150,12 +145,7 @@ fn a_tile_sliding_far_below(seconds: f32) -> SceneDesc {
     let tile = add_quads(&mut scene, &[floor_quad(-50.0, 1.0)], 1, grey);
     let slide = linear_translation(tile, Vec3::ZERO, Vec3::X, seconds);
     scene.nodes[tile].animated = true;
-    scene
-        .animations
-        .push(lmanim::scene::animation::AnimationClip {
-            name: Some("slide".into()),
-            channels: vec![slide],
-        });
+    add_clip(&mut scene, "slide", vec![slide]);
     scene
 }
 

@@ -14,7 +14,6 @@ use glam::{DMat4, DVec3, Vec3};
 
 use lmanim::lightmesh::cache::{CacheKey, StaticMaskCache};
 use lmanim::output::Image;
-use lmanim::scene::animation::AnimationClip;
 use lmanim::scene::{LightKind, SceneDesc};
 use lmanim::sequence::Sequence;
 use lmanim::settings::{Method, Settings};
@@ -58,9 +57,10 @@ fn yard(wall_x: f32, lamp_moves: bool) -> SceneDesc {
     for light in &mut scene.lights {
         light.radius = Some(0.2);
     }
-    scene.animations.push(AnimationClip {
-        name: Some("yard".into()),
-        channels: vec![
+    add_clip(
+        &mut scene,
+        "yard",
+        vec![
             linear_translation(
                 mover,
                 Vec3::new(-4.0, 0.0, 1.0),
@@ -74,7 +74,7 @@ fn yard(wall_x: f32, lamp_moves: bool) -> SceneDesc {
                 2.0,
             ),
         ],
-    });
+    );
     scene.nodes[mover].animated = true;
     scene.nodes[camera].animated = true;
     if lamp_moves {

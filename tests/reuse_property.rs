@@ -35,7 +35,6 @@ use lmanim::backend::Backend;
 use lmanim::lightmesh::kernel::Kernel;
 use lmanim::lightmesh::penumbra::Penumbra;
 use lmanim::output::Image;
-use lmanim::scene::animation::AnimationClip;
 use lmanim::scene::{LightKind, SceneDesc};
 use lmanim::schedule::Timeline;
 use lmanim::settings::{BackendKind, Method, Settings};
@@ -210,10 +209,7 @@ impl Case {
         let (sin, cos) = self.camera_azimuth.sin_cos();
         let eye = DVec3::new(12.0 * sin, 9.0, 12.0 * cos);
         add_camera(&mut scene, perspective(0.9), look_at(eye, DVec3::ZERO));
-        scene.animations.push(AnimationClip {
-            name: Some("traffic".into()),
-            channels,
-        });
+        add_clip(&mut scene, "traffic", channels);
         scene
     }
 
@@ -401,10 +397,7 @@ fn issue_32_street() -> SceneDesc {
         perspective(0.8),
         look_at(DVec3::new(-45.0, 8.0, 0.0), DVec3::new(0.0, 2.0, 0.0)),
     );
-    scene.animations.push(AnimationClip {
-        name: Some("traffic".into()),
-        channels,
-    });
+    add_clip(&mut scene, "traffic", channels);
     scene
 }
 

@@ -16,7 +16,7 @@ use lmanim::backend::Backend;
 use lmanim::lightmesh::kernel::Kernel;
 use lmanim::lightmesh::penumbra::Penumbra;
 use lmanim::output::Image;
-use lmanim::scene::animation::{AnimationClip, Channel, Interpolation, Sampler};
+use lmanim::scene::animation::{Channel, Interpolation, Sampler};
 use lmanim::scene::pose::dynamic_nodes;
 use lmanim::scene::{
     CameraProperty, LightKind, LightProperty, MaterialProperty, SceneDesc, Target,
@@ -91,10 +91,7 @@ fn street(truck_moves: bool, light_moves: bool, camera_moves: bool) -> SceneDesc
         scene.nodes[camera].animated = true;
     }
     if !channels.is_empty() {
-        scene.animations.push(AnimationClip {
-            name: Some("street".into()),
-            channels,
-        });
+        add_clip(&mut scene, "street", channels);
     }
     scene
 }
@@ -272,10 +269,7 @@ fn keyed(target: Target, interpolation: Interpolation, values: &[f32]) -> Channe
 /// The still street with `channels` playing.
 fn street_animating(channels: Vec<Channel>) -> SceneDesc {
     let mut scene = street(false, false, false);
-    scene.animations.push(AnimationClip {
-        name: Some("looks".into()),
-        channels,
-    });
+    add_clip(&mut scene, "looks", channels);
     scene
 }
 
@@ -417,14 +411,12 @@ fn with_bending_sheet(mut scene: SceneDesc) -> SceneDesc {
     let sheet = add_node(&mut scene, DMat4::IDENTITY);
     scene.nodes[sheet].mesh = Some(scene.meshes.len() - 1);
     scene.nodes[sheet].deforms = true;
-    scene.animations.push(AnimationClip {
-        name: Some("bend".into()),
-        channels: vec![keyed(
-            Target::Weights(sheet),
-            Interpolation::Linear,
-            &[0.0, 0.5, 1.0, 0.25],
-        )],
-    });
+    let bend = keyed(
+        Target::Weights(sheet),
+        Interpolation::Linear,
+        &[0.0, 0.5, 1.0, 0.25],
+    );
+    add_clip(&mut scene, "bend", vec![bend]);
     scene
 }
 

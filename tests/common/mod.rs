@@ -125,6 +125,18 @@ pub fn add_light(scene: &mut SceneDesc, kind: LightKind, intensity: f32, local: 
     node
 }
 
+/// Adds an animation clip named `name` playing `channels`.
+pub fn add_clip(
+    scene: &mut SceneDesc,
+    name: &str,
+    channels: Vec<lmanim::scene::animation::Channel>,
+) {
+    (scene.animations).push(lmanim::scene::animation::AnimationClip {
+        name: Some(name.into()),
+        channels,
+    });
+}
+
 /// A perspective projection of vertical field of view `yfov` radians,
 /// the image's aspect, near plane 0.1 m, no far plane.
 pub fn perspective(yfov: f32) -> Projection {
