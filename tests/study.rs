@@ -91,6 +91,16 @@ fn a_tiny_study_writes_all_four_outputs() {
     // Whitted's hard edge is wrong in the penumbra.
     assert!(runs[0]["penumbra_rmse"].as_f64().unwrap() > 0.05);
     assert!(runs.iter().any(|run| run["pareto"] == true));
+    // The default's verdict against area, in both errors, said on stderr.
+    let verdict = &json["default_verdict"];
+    assert_eq!(verdict["method"], "lmm1");
+    assert!(verdict["lit"]["on_front"].is_boolean(), "{verdict}");
+    assert!(verdict["penumbra"]["dominated_by"].is_array(), "{verdict}");
+    assert!(verdict["over_whitted_penumbra"].as_f64().unwrap() > 0.0);
+    assert!(
+        stderr.contains("lmm1 at the default lattice") && stderr.contains("Whitted's"),
+        "{stderr}"
+    );
 
     let csv = text(&out.join("study.csv"));
     assert_eq!(csv.lines().count(), 1 + runs.len());

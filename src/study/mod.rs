@@ -5,7 +5,8 @@
 //! between, each timed in this process on a warm machine, and then the
 //! [`candidate`]s, frames made elsewhere and timed there. Each frame's
 //! error against the reference is [`measure`]'s; the tables are
-//! [`report`]'s and the pictures [`plot`]'s.
+//! [`report`]'s, the default's standing against `area` [`verdict`]'s and
+//! the pictures [`plot`]'s.
 //!
 //! It sits beside the frame loop, not in it: it drives [`Sequence`] one
 //! frame at a time, a fresh sequence per run, so that every run starts as
@@ -18,6 +19,7 @@ pub mod measure;
 pub mod plot;
 pub mod report;
 pub mod sweep;
+pub mod verdict;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -265,10 +267,15 @@ pub fn run(
     }
     sweep::mark_pareto_front(&mut runs);
     reference_report.estimated_noise = estimated_noise(&reference_report, &runs);
+    let default_verdict = verdict::judge_default(&runs);
+    for line in default_verdict.iter().flat_map(|verdict| verdict.lines()) {
+        progress(&line);
+    }
 
     let report = StudyReport {
         reference: reference_report,
         runs,
+        default_verdict,
     };
     report.write_json(&options.out.join("study.json"))?;
     report.write_csv(&options.out.join("study.csv"))?;

@@ -1,6 +1,6 @@
-//! The study's tables: `study.json` (the reference and every run) and
-//! `study.csv` (the runs, one row each, for a spreadsheet), both written
-//! atomically.
+//! The study's tables: `study.json` (the reference, every run and the
+//! default's verdict) and `study.csv` (the runs, one row each, for a
+//! spreadsheet), both written atomically.
 
 use std::io::Write;
 use std::path::Path;
@@ -9,6 +9,7 @@ use serde::Serialize;
 
 use super::measure::Census;
 use super::sweep::{RunResult, Source};
+use super::verdict::DefaultVerdict;
 use crate::output::{write_atomically, OutputError};
 
 /// Where the reference came from and how it was classified.
@@ -38,6 +39,9 @@ pub struct ReferenceReport {
 pub struct StudyReport {
     pub reference: ReferenceReport,
     pub runs: Vec<RunResult>,
+    /// LMM1's default against `area`, and against Whitted's penumbra
+    /// error; None where the study ran neither.
+    pub default_verdict: Option<DefaultVerdict>,
 }
 
 impl StudyReport {
@@ -160,6 +164,7 @@ mod tests {
                     ..run(Method::Area, None, None, Some(0.375))
                 },
             ],
+            default_verdict: None,
         }
     }
 
@@ -190,6 +195,7 @@ mod tests {
         assert_eq!(candidate["frames"], 16);
         assert_eq!(candidate["flicker"]["penumbra"], 0.5);
         assert_eq!(json["reference"]["spp"], 1024);
+        assert!(json["default_verdict"].is_null(), "no area run, no verdict");
     }
 
     #[test]

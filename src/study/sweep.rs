@@ -159,15 +159,18 @@ pub fn mark_pareto_front(runs: &mut [RunResult]) {
     }
 }
 
-/// For each (cost, error) point, whether no other point is at most as
-/// costly and at most as wrong, and strictly better on one count.
+/// For each (cost, error) point, whether no other point dominates it.
 pub fn pareto_front(points: &[(f64, f64)]) -> Vec<bool> {
-    let dominates =
-        |a: &(f64, f64), b: &(f64, f64)| a.0 <= b.0 && a.1 <= b.1 && (a.0 < b.0 || a.1 < b.1);
     points
         .iter()
         .map(|point| !points.iter().any(|other| dominates(other, point)))
         .collect()
+}
+
+/// Whether the (cost, error) point `a` is at most as costly and at most
+/// as wrong as `b`, and strictly better on one count.
+pub fn dominates(a: &(f64, f64), b: &(f64, f64)) -> bool {
+    a.0 <= b.0 && a.1 <= b.1 && (a.0 < b.0 || a.1 < b.1)
 }
 
 #[cfg(test)]
