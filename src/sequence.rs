@@ -357,7 +357,7 @@ impl Sequence {
             return Ok(frame.clone());
         }
         let file = &self.scene_file;
-        let method = self.shadows.resolve(settings.method, &placed.lights);
+        let method = self.shadows.frame_method(settings.method, &placed.lights);
         let light_mesh = if self.shadows.uses_light_mesh(method, &placed.lights) {
             let mesh = &mut self.light_mesh;
             Some(prepared_light_mesh(

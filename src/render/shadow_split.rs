@@ -125,21 +125,27 @@ impl ShadowSplit {
 
     /// The integrators `method` runs in a frame with `lights`: `auto`
     /// runs the light mesh (by LMM1's rule) where some light is soft, and
-    /// formula (1) alone where none is. A light-mesh frame none of whose
-    /// lights the mesh would shade (every lamp off, or no light at all)
-    /// runs formula (1) alone too: it shades the lights that are on as the
-    /// light-mesh frame would have, and there is no mesh to build.
+    /// formula (1) alone where none is.
     pub fn resolve(&self, method: Method, lights: &[RenderLight]) -> FrameMethod {
-        let resolved = match FrameMethod::forced(method) {
+        match FrameMethod::forced(method) {
             Some(forced) => forced,
             None if self.has_class(Shadows::Soft, lights) => FrameMethod::LightMesh {
                 point_to_node_tests: false,
                 lights: MeshLights::Soft,
             },
             None => FrameMethod::FormulaOne,
-        };
-        match resolved {
-            FrameMethod::LightMesh { .. } if !self.uses_light_mesh(resolved, lights) => {
+        }
+    }
+
+    /// What one frame with `lights` runs: [`ShadowSplit::resolve`]'s
+    /// answer, except that a light-mesh frame none of whose lights the
+    /// mesh would shade (every lamp off, or no light at all) runs formula
+    /// (1) alone: it shades the lights that are on as the light-mesh frame
+    /// would have, and there is no mesh to build. (A run prepares its
+    /// pipelines by `resolve`, for the frames whose lamps are on.)
+    pub fn frame_method(&self, method: Method, lights: &[RenderLight]) -> FrameMethod {
+        match self.resolve(method, lights) {
+            resolved @ FrameMethod::LightMesh { .. } if !self.uses_light_mesh(resolved, lights) => {
                 FrameMethod::FormulaOne
             }
             resolved => resolved,
