@@ -97,7 +97,9 @@ pub struct LightMeshStats {
     /// Shaft queries of the fill (each settles a group of bits at once when
     /// nothing is in the way).
     pub fill_shafts: u64,
-    /// Node-to-light segments the fill traced one by one.
+    /// Node-to-light segments the fill traced one by one, once against
+    /// the static structure and once against the dynamic objects where it
+    /// tests both (the GPU traces both in one segment: `gpu.segments_traced`).
     pub fill_segments: u64,
     /// Of those, segments answered by the triangle that blocked the
     /// previous node's segment to the same light, without a tree walk.
