@@ -1282,3 +1282,54 @@ fn gpu_light_mesh_frames_start_from_the_disk_cache() {
         assert_eq!(first, on_cpu);
     }
 }
+
+/// A pane of glass over a floor, filling the view: every camera point
+/// spawns a reflected and a refracted ray, so the next level of a band of
+/// 540 672 samples holds more than a batch (2^20 rays). The GPU waits for
+/// that level's length (the only waits a Whitted band makes besides its
+/// end), splits it into batches, and still gives the CPU's frame.
+#[test]
+fn a_next_level_over_a_batch_is_split_and_matches_the_cpu() {
+    let mut scene = common::empty_scene();
+    let floor = common::add_material(&mut scene, common::lambert(Vec3::splat(0.6)));
+    let glass = common::add_material(
+        &mut scene,
+        lmanim::scene::Material {
+            roughness: 0.0,
+            transmission: 1.0,
+            ..common::lambert(Vec3::ONE)
+        },
+    );
+    common::add_quads(&mut scene, &[common::floor_quad(0.0, 40.0)], 1, floor);
+    common::add_quads(&mut scene, &[common::floor_quad(0.5, 40.0)], 1, glass);
+    common::add_light(
+        &mut scene,
+        LightKind::Point,
+        20.0,
+        DMat4::from_translation(DVec3::new(0.3, 2.0, -0.2)),
+    );
+    common::add_top_camera(&mut scene, 5.0, 2.0);
+    let (width, height) = (1024, 528);
+    let mut settings = common::settings(width, height);
+    settings.method = Method::Whitted;
+    let Some((mut gpu, exact)) = common::gpu::backend_to_compare() else {
+        return;
+    };
+    let (on_gpu, stats) = common::render_on(&mut gpu, scene.clone(), &settings);
+    assert!(
+        stats.rays.secondary > (1 << 20),
+        "{} secondary rays: more than a batch",
+        stats.rays.secondary
+    );
+    let waits = stats.gpu.as_ref().expect("GPU stats").traffic.waits;
+    // A level whose bound (two rays a point) exceeds a batch waits for
+    // its length: the camera level's next one, and that level's first
+    // batch's next one (its second batch is small); then the band's end.
+    assert_eq!(waits, 3, "two levels' lengths, then the band's end");
+    let (on_cpu, cpu_stats) = common::render_with_stats(scene, &settings);
+    assert_eq!(stats.rays, cpu_stats.rays);
+    assert_eq!(stats.shading_points, cpu_stats.shading_points);
+    if exact {
+        assert!(on_gpu == on_cpu, "the GPU's frame differs from the CPU's");
+    }
+}
