@@ -21,7 +21,7 @@ pub fn splat3(v: Vec3) -> Lanes3 {
 
 /// `[f(0), f(1), f(2)]`: what `[0, 1, 2].map(f)` means, spelled out. The
 /// array's `map` goes through a drain that the compiler left out of line
-/// in Omega's loop (a sixth of its time in a 64-lamp frame), passing each
+/// in Omega's loop (6% of a 64-lamp bench's samples), passing each
 /// eight-lane value through memory.
 #[inline(always)]
 pub fn each3<T>(mut f: impl FnMut(usize) -> T) -> [T; 3] {

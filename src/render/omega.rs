@@ -86,15 +86,6 @@ impl LightLanes {
         self.blocks.len()
     }
 
-    /// Bit per lane of `block`: the light can send something to the point,
-    /// visibility aside (in range, inside its cone, above both the
-    /// geometric and the shading horizon). The light-mesh demand stage asks
-    /// it of every point and light.
-    #[inline]
-    pub fn reaching(&self, point: &PointLanes, block: usize) -> u8 {
-        self.arrival(point, block).reaching()
-    }
-
     /// Omega of the lights of `block` at the point.
     #[inline]
     pub fn omega(&self, point: &PointLanes, block: usize) -> OmegaBlock {
@@ -103,8 +94,9 @@ impl LightLanes {
 
     /// What the lights of `block` send towards the point, as
     /// `RenderLight::incidence` and `ShadingPoint::reaching` compute it:
-    /// [`LightLanes::reaching`] and [`LightLanes::omega`] from one
-    /// evaluation, for the light-mesh demand that asks for both. Always
+    /// which lights reach it ([`Arrival::reaching`]) and their Omega
+    /// ([`Arrival::omega`]) from one evaluation, for the light-mesh demand
+    /// that asks for both. Always
     /// inlined: returned out of line, its eight-lane struct went back
     /// through memory and cost a fifth of the lanes' time.
     #[inline(always)]
@@ -239,8 +231,10 @@ pub struct Arrival {
 }
 
 impl Arrival {
-    /// Bit per lane: the light can send something to the point
-    /// ([`LightLanes::reaching`]).
+    /// Bit per lane: the light can send something to the point,
+    /// visibility aside (in range, inside its cone, above both the
+    /// geometric and the shading horizon). The light-mesh demand stage
+    /// asks it of every point and light.
     #[inline(always)]
     pub fn reaching(&self) -> u8 {
         self.reaches.to_bitmask() as u8
@@ -402,7 +396,7 @@ mod tests {
                     let block = lanes.omega(&at, index / LANES);
                     let lane = index % LANES;
                     assert_eq!(
-                        lanes.reaching(&at, index / LANES) >> lane & 1 == 1,
+                        lanes.arrival(&at, index / LANES).reaching() >> lane & 1 == 1,
                         point.reaching(light).is_some(),
                         "light {index} reaching"
                     );

@@ -1,6 +1,6 @@
 // Which of a level's shading points the masks on the GPU already serve:
 // for each point, the lights that can reach it (the demand's reaching
-// lights, `LightLanes::reaching`), and whether every node of its half-ball
+// lights, `Arrival::reaching`), and whether every node of its half-ball
 // holds a valid bit for each of them in the pool, with its enclosure flag
 // settled where LMM1 will ask for it (a node blocked from one of them).
 // Only the points it leaves out go to the CPU for demand and fill: where
