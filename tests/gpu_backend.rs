@@ -1017,6 +1017,50 @@ fn courtyard_with_mask_pool(
     Ok(frames.remove(0))
 }
 
+/// The pool's slots hold the store's bricks word for word after every
+/// frame, while the ball rolls (its swept bits invalidated, refilled)
+/// and the camera level, the mirror's and the glass's read bricks; frames
+/// after the first send the words their bricks changed, not the bricks.
+#[test]
+fn the_mask_pool_holds_the_stores_bricks_after_every_frame() {
+    let Some(gpu) = gpu() else { return };
+    let mut backend = Backend::Gpu(Box::new(gpu));
+    let settings = courtyard_lmm1();
+    let mut sequence = Sequence::load(&sample("courtyard.gltf")).expect("courtyard");
+    let slot_bytes = MaskPool::slot_bytes(1) as u64;
+    for frame in 0..4 {
+        let time = frame as f64 / 24.0;
+        let mut stats = FrameStats::default();
+        let placed = (sequence.advance(time, &settings, &mut stats)).expect("camera");
+        sequence
+            .render(&mut backend, &placed, &settings, &mut stats)
+            .expect("frame");
+        let Backend::Gpu(gpu) = &backend else {
+            unreachable!("a GPU backend")
+        };
+        let mesh = sequence.light_mesh().expect("a light mesh");
+        let stale = gpu.stale_mask_bricks(mesh).expect("the pool read back");
+        let first = &stale[..stale.len().min(4)];
+        assert!(
+            stale.is_empty(),
+            "frame {frame}: {} stale, {first:?}…",
+            stale.len()
+        );
+        let bricks = stats.lightmesh.expect("light-mesh stats").bricks_uploaded;
+        let bytes_up = stats.gpu.expect("GPU stats").traffic.bytes_up;
+        if frame > 0 {
+            // The whole frame's uploads (points, segments, uniforms
+            // included) take less than its bricks would have.
+            assert!(bricks > 0, "frame {frame} changed no brick");
+            let whole = bricks * slot_bytes;
+            assert!(
+                bytes_up < whole,
+                "frame {frame}: {bytes_up} bytes up, bricks {whole}"
+            );
+        }
+    }
+}
+
 /// A mask pool smaller than the frame's bricks evicts bricks no level
 /// reads and gives the unbounded pool's image; one smaller than a single
 /// level's bricks refuses the frame, naming h and the setting to raise.

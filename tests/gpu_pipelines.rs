@@ -182,6 +182,7 @@ fn a_run_compiles_what_its_frames_need_before_the_first() {
     for needed in [
         "light_mesh_coverage",
         "gather_points",
+        "patch_pool",
         "fill_segments",
         "light_mesh",
     ] {

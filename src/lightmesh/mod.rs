@@ -148,8 +148,9 @@ pub struct LightMeshStats {
     /// them on the CPU backend; on the GPU backend only those its mask
     /// pool did not serve yet (with reuse, a few).
     pub points_demanded: u64,
-    /// Bricks copied into the GPU backend's mask pool this frame (new to
-    /// it, or edited since their last copy); 0 on the CPU backend.
+    /// Bricks brought up into the GPU backend's mask pool this frame (new
+    /// to it, or edited since; only the words that changed travel); 0 on
+    /// the CPU backend.
     pub bricks_uploaded: u64,
     /// Of those, bricks new to the pool, given a slot this frame; 0 on
     /// the CPU backend.

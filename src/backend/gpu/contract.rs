@@ -173,7 +173,10 @@ contract! {
     /// [`Shadows::ALL`]), for counting shadow rays by class.
     CLASS_SHIFT: u32 = 3;
 
-    // A fill segment's `flags` (`fill_segments.wgsl`, `fill.rs`).
+    // A fill segment's flags (`fill_segments.wgsl`, `fill.rs`): the low
+    // bits of its `light_flags`, the light's index above them.
+    /// The bits of `light_flags` that hold the flags.
+    FILL_FLAG_BITS: u32 = 3;
     /// Trace the segment against the static structure.
     TEST_STATIC: u32 = 1;
     /// The node's static bit is known visible.
@@ -292,7 +295,7 @@ mod tests {
         "header.kernel == ",
         "header.kernel != ",
         ".shading & ",
-        "segment.flags & ",
+        "(flags & ",
         "answer |= ",
     ];
 

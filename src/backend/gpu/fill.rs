@@ -9,8 +9,8 @@ use bytemuck::{Pod, Zeroable};
 
 use super::context::{GpuContext, GpuError};
 use super::contract::{
-    DYNAMIC_BLOCKED, DYNAMIC_TESTED, KNOWN_VISIBLE, LIGHTS, STATIC_BLOCKED, TEST_DYNAMIC,
-    TEST_STATIC,
+    DYNAMIC_BLOCKED, DYNAMIC_TESTED, FILL_FLAG_BITS, KNOWN_VISIBLE, LIGHTS, STATIC_BLOCKED,
+    TEST_DYNAMIC, TEST_STATIC,
 };
 use super::direct::FrameLights;
 use super::pass::{WorldPass, WorldUse, BATCH};
@@ -18,26 +18,26 @@ use super::scene::GpuScene;
 use super::shaders::Entry;
 use crate::lightmesh::segments::{Segment, SegmentAnswer};
 
-/// `fill_segments.wgsl`'s `FillSegment`.
+/// `fill_segments.wgsl`'s `FillSegment`: 16 bytes, since a steady frame
+/// of a fly-through sends a million of them.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct FillSegment {
     origin: [f32; 3],
-    light: u32,
-    flags: u32,
-    _pad: [u32; 3],
+    /// The light's index above [`FILL_FLAG_BITS`] bits of flags.
+    light_flags: u32,
 }
 
 impl From<&Segment> for FillSegment {
     fn from(segment: &Segment) -> FillSegment {
         let flag = |on: bool, flag: u32| if on { flag } else { 0 };
+        debug_assert!(segment.light < u32::MAX >> FILL_FLAG_BITS);
         FillSegment {
             origin: segment.origin.to_array(),
-            light: segment.light,
-            flags: flag(segment.test_static, TEST_STATIC)
+            light_flags: segment.light << FILL_FLAG_BITS
+                | flag(segment.test_static, TEST_STATIC)
                 | flag(segment.known_visible, KNOWN_VISIBLE)
                 | flag(segment.test_dynamic, TEST_DYNAMIC),
-            _pad: [0; 3],
         }
     }
 }

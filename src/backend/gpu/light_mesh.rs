@@ -49,10 +49,12 @@ use crate::stats::FrameStats;
 type Counters = [u32; LIGHT_MESH_COUNTERS as usize];
 
 /// The light mesh's pipelines, made once per run: coverage (which points
-/// the pool serves), gathering the points it does not, and formula (2).
+/// the pool serves), gathering the points it does not, writing the words
+/// of the pool that changed, and formula (2).
 pub struct LightMeshPasses {
     pub(super) coverage: WorldPass,
     pub(super) gather: WorldPass,
+    pub(super) patch: WorldPass,
     pub(super) shade: LayeredPass,
 }
 
@@ -73,6 +75,7 @@ impl LightMeshPasses {
                 &[GATHER_SOURCE],
                 &[],
             ),
+            patch: WorldPass::new(context, Entry::PatchPool, WorldUse::None, &[], &[]),
             shade: LayeredPass::new(
                 context,
                 (Entry::LightMesh, Entry::LightMeshLayers),
@@ -151,7 +154,9 @@ impl<'m> LightMeshShading<'m> {
     ) -> Result<LevelReach, RenderError> {
         let start = Instant::now();
         let p2n = self.point_to_node_tests;
-        self.work.bricks_uploaded += self.pool.refresh(context, self.mesh, p2n)?;
+        let (edits, changed) = self.pool.refresh(context, self.mesh, p2n)?;
+        edits.write(context, &passes.patch, scene, recording, self.pool)?;
+        self.work.bricks_uploaded += changed;
         let light_words = MaskPool::light_words(self.mesh.masks().lights());
         // Per point, its reaching lights, then its lamps that are not faint.
         let reach_words = level.count * 2 * light_words;
@@ -207,7 +212,8 @@ impl<'m> LightMeshShading<'m> {
 
         let start = Instant::now();
         let bricks: Vec<IVec3> = demand.bricks.iter().map(|brick| brick.brick).collect();
-        let upload = (self.pool).admit(context, self.mesh, &bricks, read_slots, p2n)?;
+        let (edits, upload) = (self.pool).admit(context, self.mesh, &bricks, read_slots, p2n)?;
+        edits.write(context, &passes.patch, scene, recording, self.pool)?;
         self.work.bricks_uploaded += upload.bricks;
         self.work.bricks_inserted += upload.inserted;
         self.work.bricks_evicted += upload.evicted;

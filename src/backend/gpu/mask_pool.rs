@@ -11,10 +11,19 @@
 //!
 //! The store stays the authority: demand, fill, invalidation and the disk
 //! cache edit it, and the pool follows. Slots stay resident across frames;
-//! [`MaskPool::refresh`] copies the resident bricks edited since their
+//! [`MaskPool::refresh`] brings up the resident bricks edited since their
 //! copy (each edit moves a brick's revision) before a level's coverage
 //! pass reads them, and [`MaskPool::admit`] the bricks the level's demand
 //! named.
+//!
+//! What goes up is only what changed. The pool keeps a mirror of every
+//! slot as the GPU holds it; a brick brought up is folded and compared
+//! with its slot's mirror, and only the words that differ travel, as
+//! (word, value) patches that `patch_pool.wgsl` writes in place, or as
+//! the whole slot where most of it changed (a brick new to its slot). A
+//! fill or an invalidation edits a few nodes of a brick, so a steady
+//! frame of a fly-through sends a small part of each brick it touches
+//! instead of all of it ([`SlotEdits`]).
 //!
 //! The pool is bounded (`lightmesh.gpu_memory_mib`, and the adapter's
 //! largest binding): bricks the current level does not read are evicted,
@@ -33,8 +42,10 @@ use glam::IVec3;
 use rustc_hash::FxHashMap;
 
 use super::context::{GpuContext, GpuError};
-use super::contract::GROUPS;
-use super::scene::storage;
+use super::contract::{GROUPS, ITEMS};
+use super::pass::{Dispatch, WorldPass, BATCH};
+use super::recording::Recording;
+use super::scene::{storage, GpuScene};
 use crate::backend::RenderError;
 use crate::lightmesh::masks::{BrickEnclosure, MaskStore, BRICK_NODES, BRICK_WORDS};
 use crate::lightmesh::{LightMesh, LightMeshError};
@@ -100,6 +111,10 @@ pub struct MaskPool {
     slots: wgpu::Buffer,
     capacity: usize,
     resident: FxHashMap<IVec3, Resident>,
+    /// The words of the slots handed out, as the GPU holds them once the
+    /// edits made so far are written: what a brick's fold is compared
+    /// with, so that only the words that changed go up.
+    mirror: Vec<u32>,
     /// Slots freed by eviction, reused before the pool grows.
     free: Vec<u32>,
     /// Slots handed out so far (below `capacity`).
@@ -114,7 +129,8 @@ pub struct MaskPool {
 /// What one update uploaded, for the stats.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PoolUpload {
-    /// Bricks copied up (new to the pool, or edited since their copy).
+    /// Bricks whose slot changed (new to the pool, or edited since their
+    /// copy), whole or word by word.
     pub bricks: u64,
     /// Bricks given a slot: new to the pool.
     pub inserted: u64,
@@ -131,6 +147,7 @@ impl MaskPool {
             slots: slot_buffer(context, 16)?,
             capacity: 0,
             resident: FxHashMap::default(),
+            mirror: Vec::new(),
             free: Vec::new(),
             allocated: 0,
             updates: 0,
@@ -152,42 +169,40 @@ impl MaskPool {
 
     /// Brings every resident brick up to `mesh`'s store (invalidation
     /// edits bricks no demand names) and the directory up to the pool,
-    /// so that a coverage pass reads current masks; returns how many
-    /// bricks were copied.
+    /// so that a coverage pass reads current masks; returns the slots'
+    /// edits, for [`SlotEdits::write`], and how many bricks they change.
     pub fn refresh(
         &mut self,
         context: &GpuContext,
         mesh: &LightMesh,
         point_to_node_tests: bool,
-    ) -> Result<u64, GpuError> {
+    ) -> Result<(SlotEdits, u64), GpuError> {
         let store = mesh.masks();
         if store.id() != self.store {
             self.empty(store);
         }
-        let slot_bytes = Self::slot_bytes(self.light_words) as u64;
-        let mut copied = 0;
-        for (&brick, resident) in &mut self.resident {
-            let revision = store.brick_revision(brick);
-            if revision.is_some_and(|revision| revision != resident.revision) {
-                resident.revision = revision.unwrap_or(resident.revision);
-                write_slot(
-                    context,
-                    &self.slots,
-                    resident.slot as u64 * slot_bytes,
-                    store,
-                    brick,
-                );
-                copied += 1;
-            }
-        }
+        let stale: Vec<(IVec3, u32)> = (self.resident.iter_mut())
+            .filter_map(|(&brick, resident)| {
+                let revision = store.brick_revision(brick)?;
+                (revision != resident.revision).then(|| {
+                    resident.revision = revision;
+                    (brick, resident.slot)
+                })
+            })
+            .collect();
+        let mut edits = SlotEdits::default();
+        let changed = (stale.into_iter())
+            .filter(|&(brick, slot)| self.bring_up(store, brick, slot, &mut edits))
+            .count() as u64;
         self.build_directory(context, mesh, point_to_node_tests)?;
-        Ok(copied)
+        Ok((edits, changed))
     }
 
     /// Makes `demanded` (sorted, no repeats) resident and current for a
     /// level whose other points read the slots set in `read_slots` (a bit
     /// per slot, from the coverage pass): bricks neither names are evicted,
-    /// least recently read first, when the bound is reached.
+    /// least recently read first, when the bound is reached. Returns the
+    /// slots' edits, for [`SlotEdits::write`].
     pub fn admit(
         &mut self,
         context: &GpuContext,
@@ -195,7 +210,7 @@ impl MaskPool {
         demanded: &[IVec3],
         read_slots: &[u32],
         point_to_node_tests: bool,
-    ) -> Result<PoolUpload, RenderError> {
+    ) -> Result<(SlotEdits, PoolUpload), RenderError> {
         let store = mesh.masks();
         self.updates += 1;
         let now = self.updates;
@@ -236,6 +251,7 @@ impl MaskPool {
         if wanted > self.capacity {
             self.grow(context, wanted.max(2 * self.capacity).min(limit_slots))?;
         }
+        let mut edits = SlotEdits::default();
         for &brick in demanded {
             let Some(revision) = store.brick_revision(brick) else {
                 continue;
@@ -258,13 +274,65 @@ impl MaskPool {
             };
             if resident.revision != revision {
                 resident.revision = revision;
-                let offset = resident.slot as u64 * slot_bytes as u64;
-                write_slot(context, &self.slots, offset, store, brick);
-                upload.bricks += 1;
+                let slot = resident.slot;
+                upload.bricks += self.bring_up(store, brick, slot, &mut edits) as u64;
             }
         }
         self.build_directory(context, mesh, point_to_node_tests)?;
-        Ok(upload)
+        Ok((edits, upload))
+    }
+
+    /// Folds `brick` of `store` into the words its slot should hold and
+    /// adds to `edits` those that differ from what the slot holds (all of
+    /// them, as one write, where most differ); returns whether any did.
+    fn bring_up(
+        &mut self,
+        store: &MaskStore,
+        brick: IVec3,
+        slot: u32,
+        edits: &mut SlotEdits,
+    ) -> bool {
+        let Some(words) = fold_brick(store, brick) else {
+            return false;
+        };
+        let start = slot as usize * words.len();
+        let held = &mut self.mirror[start..start + words.len()];
+        let changed: Vec<usize> = (0..words.len()).filter(|&i| held[i] != words[i]).collect();
+        held.copy_from_slice(&words);
+        if 2 * changed.len() >= words.len() {
+            edits.slots.push((start, words));
+        } else {
+            let word = |i: usize| [(start + i) as u32, words[i]];
+            edits.words.extend(changed.iter().map(|&i| word(i)));
+        }
+        !changed.is_empty()
+    }
+
+    /// The bricks whose slots do not hold their fold of `store`, as the
+    /// GPU holds them now (read back; a test's check of the mirror and of
+    /// every edit written); empty where the pool mirrors another store.
+    pub fn stale_bricks(
+        &self,
+        context: &GpuContext,
+        store: &MaskStore,
+    ) -> Result<Vec<IVec3>, GpuError> {
+        if store.id() != self.store || self.allocated == 0 {
+            return Ok(Vec::new());
+        }
+        let words = self.allocated * Self::slot_bytes(self.light_words) / size_of::<u32>();
+        let why = "the mask pool's slots, to compare with the store";
+        let held: Vec<u32> = Recording::new(context).read_back(why, &self.slots, words)?;
+        let mut stale: Vec<IVec3> = (self.resident.iter())
+            .filter(|(&brick, resident)| {
+                let folded = fold_brick(store, brick).unwrap_or_default();
+                let start = resident.slot as usize * folded.len();
+                let slot = start..start + folded.len();
+                folded[..] != held[slot.clone()] || held[slot.clone()] != self.mirror[slot]
+            })
+            .map(|(&brick, _)| brick)
+            .collect();
+        stale.sort_unstable_by_key(|brick| brick.to_array());
+        Ok(stale)
     }
 
     /// Slots the pool holds now: the bits of a coverage pass's
@@ -287,6 +355,7 @@ impl MaskPool {
         self.store = store.id();
         self.light_words = Self::light_words(store.lights());
         self.resident.clear();
+        self.mirror.clear();
         self.free.clear();
         self.allocated = 0;
         self.capacity = 0;
@@ -330,6 +399,9 @@ impl MaskPool {
         }
         self.slots = grown;
         self.capacity = capacity;
+        // A new buffer reads zero beyond the slots copied.
+        self.mirror
+            .resize(capacity * slot_bytes / size_of::<u32>(), 0);
         Ok(())
     }
 
@@ -388,18 +460,10 @@ fn slot_buffer(context: &GpuContext, bytes: u64) -> Result<wgpu::Buffer, GpuErro
     }))
 }
 
-/// Writes `brick`'s folded node masks and enclosure flags from `store`
-/// into the slot at `offset`.
-fn write_slot(
-    context: &GpuContext,
-    slots: &wgpu::Buffer,
-    offset: u64,
-    store: &MaskStore,
-    brick: IVec3,
-) {
-    let Some(bits) = store.brick(brick) else {
-        return;
-    };
+/// `brick`'s folded node masks and enclosure flags from `store`, as its
+/// slot holds them; None where the store has no such brick.
+fn fold_brick(store: &MaskStore, brick: IVec3) -> Option<Vec<u32>> {
+    let bits = store.brick(brick)?;
     let light_words = MaskPool::light_words(store.lights());
     let mut words = Vec::with_capacity(MaskPool::slot_bytes(light_words) / size_of::<u32>());
     for slot in 0..BRICK_NODES {
@@ -411,5 +475,47 @@ fn write_slot(
     let BrickEnclosure { known, enclosed } = store.enclosure(brick);
     words.extend_from_slice(bytemuck::cast_slice(&known));
     words.extend_from_slice(bytemuck::cast_slice(&enclosed));
-    context.write(slots, offset, bytemuck::cast_slice(&words));
+    Some(words)
+}
+
+/// What the slots must be given to hold their bricks' folds: whole slots,
+/// and single words where a few of a slot's changed.
+#[derive(Debug, Default)]
+pub struct SlotEdits {
+    /// The first word of a slot, and its words.
+    slots: Vec<(usize, Vec<u32>)>,
+    /// A word of the pool, and its value.
+    words: Vec<[u32; 2]>,
+}
+
+impl SlotEdits {
+    /// Writes the edits into `pool`'s slots, after the work recorded so
+    /// far and before what is recorded next: what was recorded is
+    /// submitted first, since whole slots go by the queue's writes, which
+    /// a submission runs ahead of its own commands; the words go by
+    /// `patch`, recorded.
+    pub fn write(
+        self,
+        context: &GpuContext,
+        patch: &WorldPass,
+        scene: &GpuScene,
+        recording: &mut Recording,
+        pool: &MaskPool,
+    ) -> Result<(), GpuError> {
+        if self.slots.is_empty() && self.words.is_empty() {
+            return Ok(());
+        }
+        recording.submit();
+        for (start, words) in &self.slots {
+            let offset = (start * size_of::<u32>()) as u64;
+            context.write(&pool.slots, offset, bytemuck::cast_slice(words));
+        }
+        for words in self.words.chunks(BATCH) {
+            let items = storage(context, "mask pool words", words)?;
+            let dispatch = Dispatch::new(scene, words.len());
+            let reads = [(ITEMS, &items)];
+            patch.record(context, recording.encoder(), dispatch, &reads, &pool.slots);
+        }
+        Ok(())
+    }
 }

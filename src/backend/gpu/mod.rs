@@ -333,6 +333,16 @@ impl GpuBackend {
         (self.pool).install(|| super::cpu::warm_light_mesh(job, mesh, stats))
     }
 
+    /// The bricks of `mesh` whose slots in the mask pool do not hold
+    /// what the store folds them to, read back from the GPU: none after a
+    /// frame, for a test to check brick for brick.
+    pub fn stale_mask_bricks(&self, mesh: &LightMesh) -> Result<Vec<glam::IVec3>, GpuError> {
+        match &self.mask_pool {
+            Some(pool) => pool.stale_bricks(&self.context, mesh.masks()),
+            None => Ok(Vec::new()),
+        }
+    }
+
     /// The shading points of `rays`' closest hits as the GPU makes them
     /// for `job`'s frame (None where a ray hits nothing), for comparing
     /// with the CPU's.

@@ -86,7 +86,7 @@ impl Pipelines {
         match method {
             FrameMethod::LightMesh { .. } => {
                 let mesh = &self.light_mesh;
-                passes.extend([&mesh.coverage, &mesh.gather, &self.fill.pass]);
+                passes.extend([&mesh.coverage, &mesh.gather, &mesh.patch, &self.fill.pass]);
             }
             FrameMethod::Lamps => passes.push(&self.queries.any),
             FrameMethod::FormulaOne => {}

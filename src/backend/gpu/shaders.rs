@@ -83,6 +83,7 @@ pub enum Entry {
     DirectLight,
     LightMeshCoverage,
     GatherPoints,
+    PatchPool,
     FillSegments,
     LightMesh,
     Scatter,
@@ -98,7 +99,7 @@ pub enum Entry {
 }
 
 impl Entry {
-    pub const ALL: [Entry; 19] = [
+    pub const ALL: [Entry; 20] = [
         Entry::CameraRays,
         Entry::ClosestHit,
         Entry::AnyHit,
@@ -106,6 +107,7 @@ impl Entry {
         Entry::DirectLight,
         Entry::LightMeshCoverage,
         Entry::GatherPoints,
+        Entry::PatchPool,
         Entry::FillSegments,
         Entry::LightMesh,
         Entry::Scatter,
@@ -141,6 +143,7 @@ impl Entry {
             Entry::DirectLight | Entry::DirectLightLayers => "direct_light",
             Entry::LightMeshCoverage => "light_mesh_coverage",
             Entry::GatherPoints => "gather_points",
+            Entry::PatchPool => "patch_pool",
             Entry::FillSegments => "fill_segments",
             Entry::LightMesh | Entry::LightMeshLayers => "light_mesh",
             Entry::Scatter => "scatter",
@@ -250,6 +253,7 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
             &[],
             &[SURFACE_POINT, include_str!("shaders/gather_points.wgsl")],
         ),
+        Entry::PatchPool => (&[], &[include_str!("shaders/patch_pool.wgsl")]),
         Entry::FillSegments => (&TRACING, &FILL_SEGMENTS),
         Entry::LightMesh | Entry::LightMeshLayers => (&TRACING, &LIGHT_MESH),
         Entry::Scatter => (
@@ -457,11 +461,7 @@ mod tests {
                 size_of::<EnvironmentRecord>(),
                 vec![0, 12, 16, 28],
             ),
-            (
-                "FillSegment",
-                size_of::<FillSegment>(),
-                vec![0, 12, 16, 20, 24, 28],
-            ),
+            ("FillSegment", size_of::<FillSegment>(), vec![0, 12]),
             (
                 "MeshHeader",
                 size_of::<MeshHeader>(),

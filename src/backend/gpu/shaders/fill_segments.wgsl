@@ -7,14 +7,11 @@
 // CPU's test, so every bit is the CPU fill's.
 
 struct FillSegment {
-    origin: vec3<f32>,
-    light: u32,
-    // TEST_STATIC | KNOWN_VISIBLE | TEST_DYNAMIC (`contract.rs`); the
-    // answer has STATIC_BLOCKED | DYNAMIC_TESTED | DYNAMIC_BLOCKED.
-    flags: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    origin: array<f32, 3>,
+    // The light's index above FILL_FLAG_BITS bits of TEST_STATIC |
+    // KNOWN_VISIBLE | TEST_DYNAMIC (`contract.rs`); the answer has
+    // STATIC_BLOCKED | DYNAMIC_TESTED | DYNAMIC_BLOCKED.
+    light_flags: u32,
 }
 
 @group(0) @binding(ITEMS) var<storage, read> segments: array<FillSegment>;
@@ -27,21 +24,23 @@ fn fill_segments(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let segment = segments[index];
-    let light = lights[segment.light];
+    let origin = vec3<f32>(segment.origin[0], segment.origin[1], segment.origin[2]);
+    let flags = segment.light_flags & ((1u << FILL_FLAG_BITS) - 1u);
+    let light = lights[segment.light_flags >> FILL_FLAG_BITS];
     let directional = light.directional != 0u;
-    let direction = select(light.origin - segment.origin, light.origin, directional);
+    let direction = select(light.origin - origin, light.origin, directional);
     let t_max = select(SHADOW_SEGMENT_END, bitcast<f32>(0x7f800000u), directional);
     var answer = 0u;
-    var open = (segment.flags & KNOWN_VISIBLE) != 0u;
-    if (segment.flags & TEST_STATIC) != 0u {
+    var open = (flags & KNOWN_VISIBLE) != 0u;
+    if (flags & TEST_STATIC) != 0u {
         var found = no_hit();
-        walk_static(segment.origin, direction, t_max, true, &found);
+        walk_static(origin, direction, t_max, true, &found);
         open = found.mesh == NO_MESH;
         answer |= select(STATIC_BLOCKED, 0u, open);
     }
-    if (segment.flags & TEST_DYNAMIC) != 0u && open {
+    if (flags & TEST_DYNAMIC) != 0u && open {
         var found = no_hit();
-        walk_dynamic(segment.origin, direction, t_max, true, &found);
+        walk_dynamic(origin, direction, t_max, true, &found);
         answer |= DYNAMIC_TESTED | select(0u, DYNAMIC_BLOCKED, found.mesh != NO_MESH);
     }
     answers[index] = answer;
