@@ -194,11 +194,11 @@ fn a_light_mesh_frame_waits_for_its_coverage_flags_and_its_band() {
     assert!(cold_work.bricks_inserted > 0);
     assert_eq!(cold_work.bricks_inserted, cold_work.bricks_uploaded);
     assert_eq!(steady_work.bricks_inserted, 0);
+    // A brick goes up as the words that differ from its slot's
+    // (`tests/gpu_backend.rs` checks that the slots then hold the
+    // store's bricks): the steady frame sends its uniforms, less than one
+    // brick.
     use lmanim::backend::gpu::mask_pool::MaskPool;
     let brick_bytes = MaskPool::slot_bytes(MaskPool::light_words(2)) as u64;
-    let bricks = lightmesh(&dolly[0]).bricks_uploaded;
-    assert!(
-        bricks > 0 && cold.bytes_up >= bricks * brick_bytes,
-        "{cold:?}"
-    );
+    assert!(steady.bytes_up < brick_bytes, "{steady:?}");
 }

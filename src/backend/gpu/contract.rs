@@ -183,6 +183,12 @@ contract! {
     KNOWN_VISIBLE: u32 = 2;
     /// Trace the segment against the dynamic objects where it is open.
     TEST_DYNAMIC: u32 = 4;
+    // A fill segment's answer: ANSWER_BITS bits, ANSWERS_PER_WORD to a
+    // word, segment i's at bit ANSWER_BITS * (i % ANSWERS_PER_WORD).
+    /// The bits of one segment's answer.
+    ANSWER_BITS: u32 = 4;
+    /// Answers packed into one u32.
+    ANSWERS_PER_WORD: u32 = 32 / ANSWER_BITS;
     // A fill segment's answer bits.
     /// The static structure blocks the segment.
     STATIC_BLOCKED: u32 = 1;

@@ -15,7 +15,8 @@ struct FillSegment {
 }
 
 @group(0) @binding(ITEMS) var<storage, read> segments: array<FillSegment>;
-@group(0) @binding(ANSWERS) var<storage, read_write> answers: array<u32>;
+// ANSWERS_PER_WORD answers a word, each ANSWER_BITS bits.
+@group(0) @binding(ANSWERS) var<storage, read_write> answers: array<atomic<u32>>;
 
 @compute @workgroup_size(WORKGROUP)
 fn fill_segments(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -43,5 +44,6 @@ fn fill_segments(@builtin(global_invocation_id) id: vec3<u32>) {
         walk_dynamic(origin, direction, t_max, true, &found);
         answer |= DYNAMIC_TESTED | select(0u, DYNAMIC_BLOCKED, found.mesh != NO_MESH);
     }
-    answers[index] = answer;
+    let shift = ANSWER_BITS * (index % ANSWERS_PER_WORD);
+    atomicOr(&answers[index / ANSWERS_PER_WORD], answer << shift);
 }
