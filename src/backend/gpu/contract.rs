@@ -99,6 +99,8 @@ contract! {
     FLAGS: u32 = 15;
     /// The surface pass's object records.
     OBJECTS: u32 = 15;
+    /// The coverage pass's copies of the points it does not serve.
+    GATHERED: u32 = 16;
     /// The points' sums per light layer (`light_layers.wgsl`,
     /// `accumulate_layers.wgsl`).
     POINT_LAYERS: u32 = 16;

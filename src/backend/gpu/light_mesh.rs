@@ -6,10 +6,11 @@
 //! reuse across frames and the disk cache are the CPU's, unchanged. Per
 //! level: a coverage pass (`light_mesh_coverage.wgsl`) makes the points'
 //! reaching lights and finds those whose every node already holds valid
-//! bits in the pool; only the others come back, for the CPU's demand. The
-//! bits they miss are settled by the CPU fill's shafts where those are
-//! clear and traced on the GPU otherwise ([`super::fill`]); LMM1's
-//! enclosure probes run on the CPU; the pool takes the bricks edited. So
+//! bits in the pool; only the others come back (copied out by the pass,
+//! with its flags), for the CPU's demand. The bits they miss are settled
+//! by the CPU fill's shafts where those are clear and traced on the GPU
+//! otherwise ([`super::fill`]); LMM1's enclosure probes run on the CPU;
+//! the pool takes the words of the bricks edited. So
 //! the masks the shader reads are the CPU backend's bit for bit, and what
 //! runs on the GPU is the per-point work: the half-ball, LMM's
 //! point-to-node segments, the counts and Omega, and formula (1) where the
@@ -22,8 +23,8 @@ use glam::IVec3;
 use super::context::{GpuContext, GpuError};
 use super::contract::{
     COUNTS, COUNT_BLOCKER_RAYS, COUNT_CANDIDATES, COUNT_FALLBACK, COUNT_INTERPOLATION_SET,
-    COUNT_POINT_TO_NODE_TESTS, DIRECTORY, FLAGS, GATHER_SOURCE, ITEMS, LIGHTS, LIGHT_MESH_COUNTERS,
-    LOOPS_CUT_SHORT, POOL, REACH,
+    COUNT_POINT_TO_NODE_TESTS, DIRECTORY, FLAGS, GATHERED, GATHER_SOURCE, ITEMS, LIGHTS,
+    LIGHT_MESH_COUNTERS, LOOPS_CUT_SHORT, POOL, REACH,
 };
 use super::direct::FrameLights;
 use super::fill::FillPass;
@@ -66,7 +67,7 @@ impl LightMeshPasses {
                 Entry::LightMeshCoverage,
                 WorldUse::None,
                 &[LIGHTS, DIRECTORY, POOL],
-                &[FLAGS],
+                &[FLAGS, GATHERED],
             ),
             gather: WorldPass::new(
                 context,
@@ -136,9 +137,10 @@ impl<'m> LightMeshShading<'m> {
     /// and resident in the pool: the coverage pass finds the points the
     /// pool does not serve yet, and only those come back for the CPU's
     /// demand, fill and enclosure stages (as the CPU backend runs them):
-    /// the level waits for its coverage flags, and where some points are
-    /// not served, for those points and the fill's segments. Returns the
-    /// points' reaching lights.
+    /// the level waits for its coverage flags and the copies of those
+    /// points the pass had room for (where it had too little, once more
+    /// for a gather of them all), and where some points are not served,
+    /// for the fill's segments. Returns the points' reaching lights.
     #[allow(clippy::too_many_arguments)]
     pub fn prepare(
         &mut self,
@@ -162,8 +164,12 @@ impl<'m> LightMeshShading<'m> {
         let reach_words = level.count * 2 * light_words;
         let reach = answer_buffer::<u32>(context, "reaching lights", reach_words)?;
         let point_words = level.count.div_ceil(32);
-        let flag_words = point_words + self.pool.capacity().div_ceil(32);
+        let slot_words = self.pool.capacity().div_ceil(32);
+        // The points' flags, the slots', and the count of points unserved.
+        let flag_words = point_words + slot_words + 1;
         let flags = answer_buffer::<u32>(context, "coverage flags", flag_words)?;
+        let room = self.pool.gather_room().min(level.count);
+        let gathered = answer_buffer::<SurfacePoint>(context, "unserved points", room)?;
         let (slots, directory) = self.pool.buffers();
         let reads = [
             (ITEMS, &level.points),
@@ -171,20 +177,36 @@ impl<'m> LightMeshShading<'m> {
             (DIRECTORY, directory),
             (POOL, slots),
             (FLAGS, &flags),
+            (GATHERED, &gathered),
         ];
         let dispatch = level.dispatch(scene).with_lights(lights.count());
         (passes.coverage).record(context, recording.encoder(), dispatch, &reads, &reach);
-        let why = "the points' coverage flags: which points the CPU's demand takes";
-        let flags: Vec<u32> = recording.read_back(why, &flags, flag_words)?;
-        let (unserved, read_slots) = flags.split_at(point_words);
-        let unserved: Vec<u32> = (unserved.iter().enumerate())
-            .flat_map(|(word, &bits)| {
-                crate::bits::set_bits(bits.into()).map(move |bit| (32 * word + bit) as u32)
-            })
-            .collect();
+        let mut downloads = Downloads::default();
+        let flags_part = downloads.add::<u32>(&flags, flag_words);
+        let gathered_part = downloads.add::<SurfacePoint>(&gathered, room);
+        let why = "the coverage flags and the points the pool does not serve, for the CPU's demand";
+        let downloaded = recording.wait(why, downloads)?;
+        let flags = downloaded.take(flags_part);
+        let (unserved, read_slots) = flags[..flag_words - 1].split_at(point_words);
+        let count = flags[flag_words - 1] as usize;
+        self.pool.served(count);
         stats.add_stage_time("coverage", start.elapsed().as_secs_f64());
 
-        let records = self.gather(passes, context, recording, scene, level, &unserved)?;
+        let mut records = if count <= room {
+            let mut records = downloaded.take(gathered_part);
+            records.truncate(count);
+            records
+        } else {
+            let unserved: Vec<u32> = (unserved.iter().enumerate())
+                .flat_map(|(word, &bits)| {
+                    crate::bits::set_bits(bits.into()).map(move |bit| (32 * word + bit) as u32)
+                })
+                .collect();
+            self.gather(passes, context, recording, scene, level, &unserved)?
+        };
+        // The demand takes the points in the level's order, however the
+        // GPU copied them.
+        records.sort_unstable_by_key(SurfacePoint::level_index);
         let points: Vec<ShadingPoint> = records
             .iter()
             .filter_map(SurfacePoint::shading_point)
@@ -221,7 +243,8 @@ impl<'m> LightMeshShading<'m> {
         Ok(LevelReach { reach })
     }
 
-    /// The points of `level` at `indices`, read back.
+    /// The points of `level` at `indices`, read back: those the pool does
+    /// not serve, where the coverage pass had no room to copy them all.
     fn gather(
         &self,
         passes: &LightMeshPasses,

@@ -124,7 +124,17 @@ pub struct MaskPool {
     directory: Option<(MeshHeader, wgpu::Buffer)>,
     /// Whether the resident set changed since the directory was built.
     directory_stale: bool,
+    /// The points the last coverage pass found the pool does not serve:
+    /// what sizes the room the next one has for copies of its own
+    /// ([`MaskPool::gather_room`]).
+    unserved: usize,
 }
+
+/// Copies of unserved points a coverage pass has room for beyond the last
+/// pass's count: a frame that reuses masks leaves a similar number, and
+/// one wait brings them back with the flags; where more are left, a
+/// gather brings them back after a second wait.
+const GATHER_MARGIN: usize = 1024;
 
 /// What one update uploaded, for the stats.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -153,6 +163,7 @@ impl MaskPool {
             updates: 0,
             directory: None,
             directory_stale: true,
+            unserved: 0,
         })
     }
 
@@ -333,6 +344,18 @@ impl MaskPool {
             .collect();
         stale.sort_unstable_by_key(|brick| brick.to_array());
         Ok(stale)
+    }
+
+    /// How many unserved points the next coverage pass copies out: a
+    /// quarter more than the last pass left, and a margin.
+    pub fn gather_room(&self) -> usize {
+        self.unserved + self.unserved / 4 + GATHER_MARGIN
+    }
+
+    /// Records how many points a coverage pass found the pool does not
+    /// serve.
+    pub fn served(&mut self, unserved: usize) {
+        self.unserved = unserved;
     }
 
     /// Slots the pool holds now: the bits of a coverage pass's

@@ -84,10 +84,18 @@ pub struct SurfacePoint {
     specular: f32,
     transmission: f32,
     ior: f32,
-    _pad: [u32; 2],
+    /// The point's index in its level, in a copy gathered for the CPU
+    /// ([`super::light_mesh`]); 0 elsewhere.
+    level_index: u32,
+    _pad: u32,
 }
 
 impl SurfacePoint {
+    /// The point's index in its level, in a copy gathered for the CPU.
+    pub fn level_index(&self) -> u32 {
+        self.level_index
+    }
+
     /// The shading point, None for a miss.
     pub fn shading_point(&self) -> Option<ShadingPoint> {
         (self.hit != 0).then(|| ShadingPoint {
@@ -132,7 +140,8 @@ impl From<&ShadingPoint> for SurfacePoint {
             specular: m.specular,
             transmission: m.transmission,
             ior: m.ior,
-            _pad: [0; 2],
+            level_index: 0,
+            _pad: 0,
         }
     }
 }

@@ -12,8 +12,13 @@
 @group(0) @binding(ANSWERS) var<storage, read_write> reach: array<u32>;
 // A bit per point, set where the pool does not serve it yet; then a bit
 // per pool slot, set where a point read the slot's brick (the CPU then
-// keeps those bricks when it must evict).
+// keeps those bricks when it must evict); last, how many points the pool
+// does not serve.
 @group(0) @binding(FLAGS) var<storage, read_write> flags: array<atomic<u32>>;
+// Copies of the points the pool does not serve, as many as there is room
+// for, in no order (each carries its index): the CPU's demand takes them
+// from the wait that brings the flags back.
+@group(0) @binding(GATHERED) var<storage, read_write> gathered: array<SurfacePoint>;
 
 // Whether the pool holds every bit of `reach` (from `base`) that formula
 // (2) will read at `node`.
@@ -97,9 +102,16 @@ fn light_mesh_coverage(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 }
 
-// Flags point `index` as one the pool does not serve yet.
+// Flags point `index` as one the pool does not serve yet, and copies it
+// where there is room.
 fn mark_unserved(index: u32) {
     atomicOr(&flags[index / 32u], 1u << (index % 32u));
+    let at = atomicAdd(&flags[arrayLength(&flags) - 1u], 1u);
+    if at < arrayLength(&gathered) {
+        var point = points[index];
+        point.level_index = index;
+        gathered[at] = point;
+    }
 }
 
 // Flags the pool slot the last `node_mask` read as read by a point, once

@@ -19,6 +19,8 @@ struct SurfacePoint {
     specular: f32,
     transmission: f32,
     ior: f32,
-    _pad0: u32,
+    // The point's index in its level, in a copy gathered for the CPU
+    // (`light_mesh_coverage.wgsl`, `gather_points.wgsl`); 0 elsewhere.
+    level_index: u32,
     _pad1: u32,
 }
