@@ -1254,7 +1254,7 @@ fn gpu_fill_bits_equal_the_cpu_fill() {
         let passes = gpu.passes_for(&world).expect("upload");
         let frame_lights = FrameLights::upload(passes.context, &lights).expect("lights");
         (passes.fill)
-            .trace(passes.context, passes.scene, &frame_lights, &fill.segments)
+            .trace(passes.context, passes.scene, &frame_lights, &fill)
             .expect("GPU fill")
     };
     let mut gpu_stats = LightMeshStats::default();

@@ -49,32 +49,36 @@ pub struct SegmentAnswer {
     pub dynamic_blocked: bool,
 }
 
-/// Where a bit of the fill goes: the demand brick (its index), the node's
-/// slot, the light.
+/// Where a bit of a brick's fill goes: the node's slot and the light.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Place {
-    brick: u32,
     slot: u16,
     light: u32,
 }
 
 impl Place {
-    /// The brick's update, the word and the bit this place's bit is.
-    fn locate<'u>(
-        &self,
-        updates: &'u mut [LayerUpdate],
-        words: usize,
-    ) -> (&'u mut LayerUpdate, usize, u64) {
+    /// The word and the bit of a brick's update that this place's bit is.
+    fn locate(&self, words: usize) -> (usize, u64) {
         let light = self.light as usize;
-        let word = self.slot as usize * words + light / 64;
-        (&mut updates[self.brick as usize], word, 1 << (light % 64))
+        (self.slot as usize * words + light / 64, 1 << (light % 64))
     }
 }
 
-/// A frame's fill: bits shafts settled, and segments for the tracer.
+/// A frame's fill: per demanded brick (in the demand's order), the bits
+/// shafts settled and the segments left for the tracer. Kept brick by
+/// brick, so that the tracer's records are made and the answers merged
+/// in parallel, without one list of every segment in between (tens of
+/// millions on a cold frame of many lamps).
 #[derive(Clone, Debug, Default)]
 pub struct SegmentFill {
-    pub segments: Vec<Segment>,
+    bricks: Vec<BrickFill>,
+    shafts: u64,
+}
+
+/// One brick's part of a [`SegmentFill`].
+#[derive(Clone, Debug, Default)]
+struct BrickFill {
+    segments: Vec<Segment>,
     /// Per segment, where its bits go.
     places: Vec<Place>,
     /// Static bits a clear shaft settled visible, and dynamic bits one
@@ -82,6 +86,25 @@ pub struct SegmentFill {
     static_clear: Vec<Place>,
     dynamic_clear: Vec<Place>,
     shafts: u64,
+}
+
+impl SegmentFill {
+    /// The segments, in brick, node and light order, each as `record`
+    /// makes it for the tracer.
+    pub fn records<T: Send>(&self, record: impl Fn(&Segment) -> T + Sync + Send) -> Vec<T> {
+        (self.bricks.par_iter())
+            .flat_map_iter(|brick| brick.segments.iter().map(&record))
+            .collect()
+    }
+
+    /// How many segments there are.
+    pub fn len(&self) -> usize {
+        self.bricks.iter().map(|brick| brick.segments.len()).sum()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
 }
 
 /// One light word of one brick's missing bits, node by node.
@@ -103,35 +126,25 @@ impl LightMesh {
         world: &World,
     ) -> Result<SegmentFill, LightMeshError> {
         self.check_memory(demand, lights.len())?;
-        let per_brick: Vec<SegmentFill> = (demand.bricks.par_iter().enumerate())
-            .map(|(index, brick)| {
-                self.brick_segments(index as u32, brick, demand.words, lights, world)
-            })
+        let bricks: Vec<BrickFill> = (demand.bricks.par_iter())
+            .map(|brick| self.brick_segments(brick, demand.words, lights, world))
             .collect();
-        let mut fill = SegmentFill::default();
-        for brick in per_brick {
-            fill.segments.extend(brick.segments);
-            fill.places.extend(brick.places);
-            fill.static_clear.extend(brick.static_clear);
-            fill.dynamic_clear.extend(brick.dynamic_clear);
-            fill.shafts += brick.shafts;
-        }
-        Ok(fill)
+        let shafts = bricks.iter().map(|brick| brick.shafts).sum();
+        Ok(SegmentFill { bricks, shafts })
     }
 
     fn brick_segments(
         &self,
-        index: u32,
         brick: &BrickDemand,
         words: usize,
         lights: &[RenderLight],
         world: &World,
-    ) -> SegmentFill {
+    ) -> BrickFill {
         let stored = self.masks.brick(brick.brick);
         let positions: Vec<Vec3> = (0..BRICK_NODES)
             .map(|slot| self.lattice.node_position(join(brick.brick, slot)))
             .collect();
-        let mut fill = SegmentFill::default();
+        let mut fill = BrickFill::default();
         for word in 0..words {
             let mut bits = WordBits {
                 test_static: vec![0; BRICK_NODES],
@@ -151,7 +164,6 @@ impl LightMesh {
             }
             let light = |bit: usize| &lights[word * 64 + bit];
             let place = |slot: usize, bit: usize| Place {
-                brick: index,
                 slot: slot as u16,
                 light: (word * 64 + bit) as u32,
             };
@@ -203,8 +215,9 @@ impl LightMesh {
     }
 
     /// Records the shafts' bits and the tracer's `answers` (parallel to
-    /// `fill.segments`) in the masks, and what the fill did in `stats`, as
-    /// [`LightMesh::fill`] records its own.
+    /// the segments) in the masks, and what the fill did in `stats`, as
+    /// [`LightMesh::fill`] records its own. The bricks' updates are made
+    /// in parallel, then merged in the demand's order.
     pub fn merge_segments(
         &mut self,
         demand: &Demand,
@@ -212,61 +225,97 @@ impl LightMesh {
         answers: &[SegmentAnswer],
         stats: &mut LightMeshStats,
     ) {
-        debug_assert_eq!(answers.len(), fill.segments.len());
+        debug_assert_eq!(answers.len(), fill.len());
         let words = demand.words;
-        let mut updates: Vec<LayerUpdate> = (0..demand.bricks.len())
-            .map(|_| LayerUpdate::zeroed(BRICK_NODES * words))
+        let mut rest = answers;
+        let brick_answers: Vec<&[SegmentAnswer]> = (fill.bricks.iter())
+            .map(|brick| {
+                let (own, after) = rest.split_at(brick.segments.len());
+                rest = after;
+                own
+            })
             .collect();
-        for place in &fill.static_clear {
-            let (update, word, bit) = place.locate(&mut updates, words);
-            update.static_computed[word] |= bit;
-            update.static_visible[word] |= bit;
-        }
-        for place in &fill.dynamic_clear {
-            let (update, word, bit) = place.locate(&mut updates, words);
-            update.dynamic_computed[word] |= bit;
-        }
-        for ((segment, answer), place) in fill.segments.iter().zip(answers).zip(&fill.places) {
-            let (update, word, bit) = place.locate(&mut updates, words);
-            if segment.test_static {
-                stats.fill_segments += 1;
-                update.static_computed[word] |= bit;
-                if !answer.static_blocked {
-                    update.static_visible[word] |= bit;
-                }
-            }
-            if answer.dynamic_tested {
-                stats.fill_segments += 1;
-                update.dynamic_computed[word] |= bit;
-                if answer.dynamic_blocked {
-                    update.dynamic_occluded[word] |= bit;
-                }
-            }
-        }
+        let merged: Vec<BrickMerge> = (fill.bricks.par_iter())
+            .zip(&demand.bricks)
+            .zip(brick_answers)
+            .map(|((brick, demanded), answers)| brick.merge(demanded, answers, words))
+            .collect();
         stats.fill_shafts += fill.shafts;
-        for (brick, update) in demand.bricks.iter().zip(&updates) {
-            let mut computed_bits = 0;
-            for slot in 0..BRICK_NODES {
-                let range = slot * words..(slot + 1) * words;
-                let computed: u64 = (update.static_computed[range.clone()].iter())
-                    .zip(&update.dynamic_computed[range])
-                    .map(|(s, d)| (s | d).count_ones() as u64)
-                    .sum();
-                stats.nodes_computed += (computed > 0) as u64;
-                computed_bits += computed;
-            }
-            let needed: u64 = brick.needed.iter().map(|w| w.count_ones() as u64).sum();
-            stats.bits_computed += computed_bits;
-            stats.bits_reused += needed - computed_bits;
-            if computed_bits > 0 {
-                self.masks.merge_brick(brick.brick, update);
+        for (demanded, merge) in demand.bricks.iter().zip(merged) {
+            stats.fill_segments += merge.segments;
+            stats.nodes_computed += merge.nodes_computed;
+            stats.bits_computed += merge.bits_computed;
+            stats.bits_reused += merge.bits_needed - merge.bits_computed;
+            if merge.bits_computed > 0 {
+                self.masks.merge_brick(demanded.brick, &merge.update);
             }
         }
         stats.nodes_cached = self.masks.nodes_cached() as u64;
     }
 }
 
-impl SegmentFill {
+/// One brick's bits from its fill, and what they count for the stats.
+struct BrickMerge {
+    update: LayerUpdate,
+    segments: u64,
+    nodes_computed: u64,
+    bits_computed: u64,
+    bits_needed: u64,
+}
+
+impl BrickFill {
+    /// The brick's update from its shafts and `answers` (parallel to its
+    /// segments), with `words` light words per node.
+    fn merge(&self, demanded: &BrickDemand, answers: &[SegmentAnswer], words: usize) -> BrickMerge {
+        let mut update = LayerUpdate::zeroed(BRICK_NODES * words);
+        let mut segments = 0;
+        for place in &self.static_clear {
+            let (word, bit) = place.locate(words);
+            update.static_computed[word] |= bit;
+            update.static_visible[word] |= bit;
+        }
+        for place in &self.dynamic_clear {
+            let (word, bit) = place.locate(words);
+            update.dynamic_computed[word] |= bit;
+        }
+        for ((segment, answer), place) in self.segments.iter().zip(answers).zip(&self.places) {
+            let (word, bit) = place.locate(words);
+            if segment.test_static {
+                segments += 1;
+                update.static_computed[word] |= bit;
+                if !answer.static_blocked {
+                    update.static_visible[word] |= bit;
+                }
+            }
+            if answer.dynamic_tested {
+                segments += 1;
+                update.dynamic_computed[word] |= bit;
+                if answer.dynamic_blocked {
+                    update.dynamic_occluded[word] |= bit;
+                }
+            }
+        }
+        let (mut nodes_computed, mut bits_computed) = (0, 0);
+        for slot in 0..BRICK_NODES {
+            let range = slot * words..(slot + 1) * words;
+            let computed: u64 = (update.static_computed[range.clone()].iter())
+                .zip(&update.dynamic_computed[range])
+                .map(|(s, d)| (s | d).count_ones() as u64)
+                .sum();
+            nodes_computed += (computed > 0) as u64;
+            bits_computed += computed;
+        }
+        BrickMerge {
+            update,
+            segments,
+            nodes_computed,
+            bits_computed,
+            bits_needed: demanded.needed.iter().map(|w| w.count_ones() as u64).sum(),
+        }
+    }
+}
+
+impl BrickFill {
     /// Whether the shaft from `members`' box to `light` is clear by
     /// `is_clear`; only groups of [`MIN_SHAFT_NODES`] or more towards a
     /// light with a position are worth a shaft.

@@ -18,7 +18,7 @@ use super::pass::{answer_buffer, Dispatch, WorldPass, WorldUse, BATCH};
 use super::recording::{Downloads, Part, Recording};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
-use crate::lightmesh::segments::{Segment, SegmentAnswer};
+use crate::lightmesh::segments::{Segment, SegmentAnswer, SegmentFill};
 
 /// `fill_segments.wgsl`'s `FillSegment`: 16 bytes, since a steady frame
 /// of a fly-through sends a million of them.
@@ -68,7 +68,7 @@ impl FillPass {
         }
     }
 
-    /// Traces `segments` against `scene` with `lights`, in batches
+    /// Traces `fill`'s segments against `scene` with `lights`, in batches
     /// recorded [`BATCHES_PER_WAIT`] at a time and waited for together;
     /// one answer per segment, in order.
     pub fn trace(
@@ -76,8 +76,9 @@ impl FillPass {
         context: &GpuContext,
         scene: &GpuScene,
         lights: &FrameLights,
-        segments: &[Segment],
+        fill: &SegmentFill,
     ) -> Result<Vec<SegmentAnswer>, GpuError> {
+        let segments = fill.records(|segment| FillSegment::from(segment));
         let mut answers = Vec::with_capacity(segments.len());
         for group in segments.chunks(BATCH * BATCHES_PER_WAIT) {
             let words = context.checked(Entry::FillSegments.name(), || {
@@ -104,13 +105,12 @@ impl FillPass {
         context: &GpuContext,
         scene: &GpuScene,
         lights: &FrameLights,
-        group: &[Segment],
+        group: &[FillSegment],
     ) -> Result<Vec<u32>, GpuError> {
         let mut recording = Recording::new(context);
         let mut batches = Vec::new();
         for batch in group.chunks(BATCH) {
-            let items: Vec<FillSegment> = batch.iter().map(FillSegment::from).collect();
-            let items = storage(context, "fill segments", &items)?;
+            let items = storage(context, "fill segments", batch)?;
             let words = batch.len().div_ceil(ANSWERS_PER_WORD as usize);
             let answers = answer_buffer::<u32>(context, "fill answers", words)?;
             let dispatch = Dispatch::new(scene, batch.len()).with_lights(lights.count());

@@ -219,7 +219,7 @@ impl<'m> LightMeshShading<'m> {
 
         let start = Instant::now();
         let fill = (self.mesh).fill_segments(&demand, &job.frame.lights, job.world)?;
-        let answers = fill_pass.trace(context, scene, lights, &fill.segments)?;
+        let answers = fill_pass.trace(context, scene, lights, &fill)?;
         self.mesh
             .merge_segments(&demand, &fill, &answers, &mut self.work);
         stats.add_stage_time("fill", start.elapsed().as_secs_f64());
