@@ -14,9 +14,34 @@ pub fn set_bits(mut word: u64) -> impl Iterator<Item = usize> {
     })
 }
 
+/// For each bit set in some of `words`, lowest first, the indices of the
+/// words that hold it, lowest first: a brick's nodes grouped by light,
+/// in one pass over the words instead of one per light.
+pub fn holders_by_bit(words: &[u64]) -> Vec<(usize, Vec<usize>)> {
+    let mut holders: [Vec<usize>; 64] = std::array::from_fn(|_| Vec::new());
+    for (index, &word) in words.iter().enumerate() {
+        for bit in set_bits(word) {
+            holders[bit].push(index);
+        }
+    }
+    (holders.into_iter().enumerate())
+        .filter(|(_, indices)| !indices.is_empty())
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn groups_the_holders_of_each_bit_in_order() {
+        assert!(holders_by_bit(&[0, 0]).is_empty());
+        let words = [0b101, 0, 1 << 63 | 0b100, 0b1];
+        assert_eq!(
+            holders_by_bit(&words),
+            [(0, vec![0, 3]), (2, vec![0, 2]), (63, vec![2])]
+        );
+    }
 
     #[test]
     fn walks_the_set_bits_in_order() {

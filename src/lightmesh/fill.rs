@@ -27,7 +27,7 @@ use glam::Vec3;
 
 use crate::accel::shaft::Shaft;
 use crate::accel::{StaticTriangle, World};
-use crate::bits::set_bits;
+use crate::bits::holders_by_bit;
 use crate::render::light::RenderLight;
 
 /// Bits computed for one brick, laid out like the demand's table.
@@ -84,10 +84,7 @@ impl LayerTest<'_> {
     /// missing bits whose segment is blocked.
     fn settle(&self, positions: &[Vec3], missing: &[u64], work: &mut FillWork) -> Vec<u64> {
         let mut blocked = vec![0; missing.len()];
-        for bit in set_bits(missing.iter().fold(0, |all, bits| all | bits)) {
-            let members: Vec<usize> = (0..missing.len())
-                .filter(|&i| missing[i] >> bit & 1 == 1)
-                .collect();
+        for (bit, members) in holders_by_bit(missing) {
             let light = &self.lights[self.word * 64 + bit];
             self.settle_group(light, 1 << bit, positions, &members, &mut blocked, work);
         }

@@ -22,7 +22,7 @@ use super::masks::{join, LayerUpdate, BRICK_NODES};
 use super::{LightMesh, LightMeshError, LightMeshStats};
 use crate::accel::shaft::Shaft;
 use crate::accel::World;
-use crate::bits::set_bits;
+use crate::bits::{holders_by_bit, set_bits};
 use crate::render::light::RenderLight;
 
 /// One node-to-light segment of the fill.
@@ -168,8 +168,9 @@ impl LightMesh {
                 light: (word * 64 + bit) as u32,
             };
             // Static shafts first: a clear one leaves its nodes open.
-            for bit in set_bits(bits.test_static.iter().fold(0, |all, b| all | b)) {
-                let members = group(&bits.test_static, bit);
+            // A clear shaft clears only its own light's bits, so the
+            // groups made before it stand.
+            for (bit, members) in holders_by_bit(&bits.test_static) {
                 if fill.shaft_is_clear(&members, &positions, light(bit), |shaft| {
                     world.shaft_is_clear_static(shaft)
                 }) {
@@ -184,8 +185,7 @@ impl LightMesh {
             let open_dynamic: Vec<u64> = (0..BRICK_NODES)
                 .map(|slot| bits.test_dynamic[slot] & bits.known_visible[slot])
                 .collect();
-            for bit in set_bits(open_dynamic.iter().fold(0, |all, b| all | b)) {
-                let members = group(&open_dynamic, bit);
+            for (bit, members) in holders_by_bit(&open_dynamic) {
                 let clear = !world.has_dynamic()
                     || fill.shaft_is_clear(&members, &positions, light(bit), |shaft| {
                         world.shaft_is_clear_dynamic(shaft)
@@ -339,11 +339,4 @@ impl BrickFill {
         self.shafts += 1;
         is_clear(&Shaft::new(min, max, apex))
     }
-}
-
-/// The slots whose `bits` hold `bit`.
-fn group(bits: &[u64], bit: usize) -> Vec<usize> {
-    (0..bits.len())
-        .filter(|&slot| bits[slot] >> bit & 1 == 1)
-        .collect()
 }
