@@ -159,6 +159,60 @@ impl<'m> LightMeshShading<'m> {
         let (edits, changed) = self.pool.refresh(context, self.mesh, p2n)?;
         edits.write(context, &passes.patch, scene, recording, self.pool)?;
         self.work.bricks_uploaded += changed;
+        let (reach, records, read_slots) =
+            self.cover(passes, context, scene, lights, level, recording)?;
+        stats.add_stage_time("coverage", start.elapsed().as_secs_f64());
+
+        let points: Vec<ShadingPoint> = records
+            .iter()
+            .filter_map(SurfacePoint::shading_point)
+            .collect();
+
+        let start = Instant::now();
+        self.work.points_demanded += points.len() as u64;
+        let demand = self.mesh.demand(&points, &self.lanes)?;
+        stats.add_stage_time("demand", start.elapsed().as_secs_f64());
+
+        let start = Instant::now();
+        let fill = (self.mesh).fill_segments(&demand, &job.frame.lights, job.world)?;
+        let answers = fill_pass.trace(context, scene, lights, &fill)?;
+        self.mesh
+            .merge_segments(&demand, &fill, &answers, &mut self.work);
+        stats.add_stage_time("fill", start.elapsed().as_secs_f64());
+
+        if !p2n {
+            let start = Instant::now();
+            let enclosure = self.mesh.settle_enclosure(&demand, job.world);
+            self.work.nodes_probed += enclosure.probed;
+            self.work.enclosure_reused += enclosure.reused;
+            stats.add_stage_time("enclosure", start.elapsed().as_secs_f64());
+        }
+
+        let start = Instant::now();
+        let bricks: Vec<IVec3> = demand.bricks.iter().map(|brick| brick.brick).collect();
+        let (edits, upload) = (self.pool).admit(context, self.mesh, &bricks, &read_slots, p2n)?;
+        edits.write(context, &passes.patch, scene, recording, self.pool)?;
+        self.work.bricks_uploaded += upload.bricks;
+        self.work.bricks_inserted += upload.inserted;
+        self.work.bricks_evicted += upload.evicted;
+        stats.add_stage_time("upload", start.elapsed().as_secs_f64());
+        Ok(reach)
+    }
+
+    /// Records `level`'s coverage pass and waits for what the CPU needs
+    /// from it: the points' reaching lights (left on the GPU), the points
+    /// the pool does not serve, in the level's order (gathered after a
+    /// second wait where the pass had no room to copy them all), and the
+    /// slots the others read, a bit each.
+    fn cover(
+        &mut self,
+        passes: &LightMeshPasses,
+        context: &GpuContext,
+        scene: &GpuScene,
+        lights: &FrameLights,
+        level: &LevelBuffers,
+        recording: &mut Recording,
+    ) -> Result<(LevelReach, Vec<SurfacePoint>, Vec<u32>), RenderError> {
         let light_words = MaskPool::light_words(self.mesh.masks().lights());
         // Per point, its reaching lights, then its lamps that are not faint.
         let reach_words = level.count * 2 * light_words;
@@ -190,8 +244,6 @@ impl<'m> LightMeshShading<'m> {
         let (unserved, read_slots) = flags[..flag_words - 1].split_at(point_words);
         let count = flags[flag_words - 1] as usize;
         self.pool.served(count);
-        stats.add_stage_time("coverage", start.elapsed().as_secs_f64());
-
         let mut records = if count <= room {
             let mut records = downloaded.take(gathered_part);
             records.truncate(count);
@@ -207,40 +259,7 @@ impl<'m> LightMeshShading<'m> {
         // The demand takes the points in the level's order, however the
         // GPU copied them.
         records.sort_unstable_by_key(SurfacePoint::level_index);
-        let points: Vec<ShadingPoint> = records
-            .iter()
-            .filter_map(SurfacePoint::shading_point)
-            .collect();
-
-        let start = Instant::now();
-        self.work.points_demanded += points.len() as u64;
-        let demand = self.mesh.demand(&points, &self.lanes)?;
-        stats.add_stage_time("demand", start.elapsed().as_secs_f64());
-
-        let start = Instant::now();
-        let fill = (self.mesh).fill_segments(&demand, &job.frame.lights, job.world)?;
-        let answers = fill_pass.trace(context, scene, lights, &fill)?;
-        self.mesh
-            .merge_segments(&demand, &fill, &answers, &mut self.work);
-        stats.add_stage_time("fill", start.elapsed().as_secs_f64());
-
-        if !p2n {
-            let start = Instant::now();
-            let enclosure = self.mesh.settle_enclosure(&demand, job.world);
-            self.work.nodes_probed += enclosure.probed;
-            self.work.enclosure_reused += enclosure.reused;
-            stats.add_stage_time("enclosure", start.elapsed().as_secs_f64());
-        }
-
-        let start = Instant::now();
-        let bricks: Vec<IVec3> = demand.bricks.iter().map(|brick| brick.brick).collect();
-        let (edits, upload) = (self.pool).admit(context, self.mesh, &bricks, read_slots, p2n)?;
-        edits.write(context, &passes.patch, scene, recording, self.pool)?;
-        self.work.bricks_uploaded += upload.bricks;
-        self.work.bricks_inserted += upload.inserted;
-        self.work.bricks_evicted += upload.evicted;
-        stats.add_stage_time("upload", start.elapsed().as_secs_f64());
-        Ok(LevelReach { reach })
+        Ok((LevelReach { reach }, records, read_slots.to_vec()))
     }
 
     /// The points of `level` at `indices`, read back: those the pool does
