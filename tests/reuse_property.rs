@@ -39,7 +39,6 @@ use lmanim::lightmesh::penumbra::Penumbra;
 use lmanim::output::Image;
 use lmanim::scene::{LightKind, SceneDesc};
 use lmanim::schedule::Timeline;
-use lmanim::sequence::Sequence;
 use lmanim::settings::{BackendKind, Method, Settings};
 use lmanim::stats::FrameStats;
 
@@ -260,29 +259,12 @@ fn run(
             let mut stats = FrameStats::default();
             let placed = (sequence.advance(timeline.time_of(frame), settings, &mut stats)).unwrap();
             let image = (sequence.render(backend, &placed, settings, &mut stats)).unwrap();
-            assert_pool_holds_the_store(backend, &sequence, frame);
+            common::gpu::assert_pool_holds_the_store(backend, &sequence, frame);
             image
         })
         .collect();
     sequence.save_cache().unwrap();
     images
-}
-
-/// On the GPU backend, the mask pool's resident slots hold the light
-/// mesh's bricks word for word after `frame`: what it sent up (words of
-/// bricks edited by the fill, by invalidation, by the disk cache) made
-/// the GPU's copy the store's.
-fn assert_pool_holds_the_store(backend: &Backend, sequence: &Sequence, frame: u32) {
-    let (Backend::Gpu(gpu), Some(mesh)) = (backend, sequence.light_mesh()) else {
-        return;
-    };
-    let stale = gpu.stale_mask_bricks(mesh).expect("the pool read back");
-    let first = &stale[..stale.len().min(4)];
-    assert!(
-        stale.is_empty(),
-        "frame {frame}: {} stale bricks, {first:?}",
-        stale.len()
-    );
 }
 
 /// `lmanim warm` over `frames`: their masks computed and their static

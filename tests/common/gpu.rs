@@ -3,6 +3,7 @@
 use lmanim::backend::{Backend, GpuBackend};
 use lmanim::output::Image;
 use lmanim::scene::SceneDesc;
+use lmanim::sequence::Sequence;
 use lmanim::settings::Settings;
 
 /// The GPU backend, or None (with the reason on stderr) off CI when no
@@ -43,4 +44,21 @@ pub fn assert_gpu_frame_is(scene: &SceneDesc, settings: &Settings, on_cpu: &Imag
     } else {
         assert!(on_gpu.pixels.iter().all(|p| p.is_finite()));
     }
+}
+
+/// On the GPU backend, the mask pool's resident slots hold `sequence`'s
+/// light-mesh bricks word for word after `frame`: what the pool sent up
+/// (words of bricks edited by the fill, by invalidation, by the disk
+/// cache) made the GPU's copy the store's. Nothing to hold elsewhere.
+pub fn assert_pool_holds_the_store(backend: &Backend, sequence: &Sequence, frame: u32) {
+    let (Backend::Gpu(gpu), Some(mesh)) = (backend, sequence.light_mesh()) else {
+        return;
+    };
+    let stale = gpu.stale_mask_bricks(mesh).expect("the pool read back");
+    let first = &stale[..stale.len().min(4)];
+    assert!(
+        stale.is_empty(),
+        "frame {frame}: {} stale bricks, {first:?}…",
+        stale.len()
+    );
 }

@@ -330,20 +330,27 @@ impl MaskPool {
         if store.id() != self.store || self.allocated == 0 {
             return Ok(Vec::new());
         }
-        let words = self.allocated * Self::slot_bytes(self.light_words) / size_of::<u32>();
+        let slot_words = self.slot_words();
         let why = "the mask pool's slots, to compare with the store";
-        let held: Vec<u32> = Recording::new(context).read_back(why, &self.slots, words)?;
+        let held: Vec<u32> =
+            Recording::new(context).read_back(why, &self.slots, self.allocated * slot_words)?;
         let mut stale: Vec<IVec3> = (self.resident.iter())
             .filter(|(&brick, resident)| {
-                let folded = fold_brick(store, brick).unwrap_or_default();
-                let start = resident.slot as usize * folded.len();
-                let slot = start..start + folded.len();
-                folded[..] != held[slot.clone()] || held[slot.clone()] != self.mirror[slot]
+                let start = resident.slot as usize * slot_words;
+                let slot = start..start + slot_words;
+                let folded = fold_brick(store, brick);
+                folded.as_deref() != Some(&held[slot.clone()])
+                    || held[slot.clone()] != self.mirror[slot]
             })
             .map(|(&brick, _)| brick)
             .collect();
         stale.sort_unstable_by_key(|brick| brick.to_array());
         Ok(stale)
+    }
+
+    /// u32 words of one slot.
+    fn slot_words(&self) -> usize {
+        Self::slot_bytes(self.light_words) / size_of::<u32>()
     }
 
     /// How many unserved points the next coverage pass copies out: a
