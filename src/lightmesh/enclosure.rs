@@ -24,12 +24,15 @@
 //! the base of a much larger solid may not be found: it then keeps LMM1's
 //! old behaviour).
 //!
-//! In a frame this runs after the fill, for LMM1 only, and settles the
-//! nodes the demand named that are blocked from some light and have no
-//! flag yet (see [`blocks_some`]); formula (2) then leaves out enclosed
-//! nodes blocked from some light the point asks for. Only static geometry is probed, so no moving object
-//! can change a flag and reuse stays exact; the flags are not in the disk
-//! cache, so each run probes its nodes once.
+//! In a frame this runs for LMM1 only, and settles the nodes the demand
+//! named that are blocked from some light and have no flag yet (see
+//! [`blocks_some`]); formula (2) then leaves out enclosed nodes blocked
+//! from some light the point asks for. On the CPU it runs after the fill;
+//! on the GPU, before the fill's answers are back, so there a node whose
+//! bits are still being traced is probed too (it may turn out blocked).
+//! Only static geometry is probed, so no moving object can change a flag,
+//! probing a node early changes no image, and reuse stays exact; the
+//! flags are not in the disk cache, so each run probes its nodes once.
 
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
@@ -99,6 +102,12 @@ pub fn blocks_some(mask: &NodeMask, lights: &[u64]) -> bool {
         .any(|(word, &wanted)| wanted & mask.valid(word) & !mask.visible(word) != 0)
 }
 
+/// Whether some light of `lights` has no valid bit at the node of `mask`
+/// yet: its fill is still on its way.
+fn misses_some(mask: &NodeMask, lights: &[u64]) -> bool {
+    (lights.iter().enumerate()).any(|(word, &wanted)| wanted & !mask.valid(word) != 0)
+}
+
 /// LMM1's stand-in for the point-to-node tests: leaves out of `nodes` those
 /// inside closed geometry (their flag settled by the enclosure stage) that
 /// are blocked from some light of `lights`.
@@ -123,9 +132,10 @@ pub struct EnclosureWork {
 
 impl LightMesh {
     /// Settles the enclosure flag of every node `demand` names that is
-    /// blocked from some light it is asked for and has no flag yet, in
-    /// parallel over bricks. Runs after the fill, which has made every
-    /// needed bit valid.
+    /// blocked from some light it is asked for, or may be (its bit is not
+    /// valid yet), and has no flag yet, in parallel over bricks. After
+    /// the CPU's fill every needed bit is valid; the GPU's may still be
+    /// tracing.
     pub fn settle_enclosure(&mut self, demand: &Demand, world: &World) -> EnclosureWork {
         let reach = REACH_IN_RADII * self.radius();
         let words = demand.words;
@@ -141,7 +151,7 @@ impl LightMesh {
                     let bit = 1u64 << (slot % 64);
                     let mask = self.masks.slot_mask(bits, slot);
                     let needed = &brick.needed[slot * words..(slot + 1) * words];
-                    if !blocks_some(&mask, needed) {
+                    if !blocks_some(&mask, needed) && !misses_some(&mask, needed) {
                         continue;
                     }
                     if known[slot / 64] & bit != 0 {

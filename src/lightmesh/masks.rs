@@ -211,6 +211,15 @@ impl MaskStore {
         self.bricks.get(&brick).map(|stored| stored.revision)
     }
 
+    /// Makes `brick` if the store has none yet: its bits are about to be
+    /// written where the store's copies are (the GPU's pool), and come
+    /// back to it later.
+    pub fn hold(&mut self, brick: IVec3) {
+        if !self.bricks.contains_key(&brick) {
+            self.edit(brick);
+        }
+    }
+
     /// `brick`, made if the store has none yet, stamped as edited now.
     fn edit(&mut self, brick: IVec3) -> &mut Brick {
         self.revision += 1;

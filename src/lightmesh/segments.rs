@@ -30,6 +30,8 @@ use crate::render::light::RenderLight;
 pub struct Segment {
     /// The node's position.
     pub origin: Vec3,
+    /// The node's slot in its brick.
+    pub node: u16,
     pub light: u32,
     /// The static bit is missing: test the static structure.
     pub test_static: bool,
@@ -38,6 +40,30 @@ pub struct Segment {
     /// The dynamic bit is missing: test the dynamic objects where the node
     /// is open.
     pub test_dynamic: bool,
+    /// The dynamic bit is known and occluded (where it is not missing):
+    /// with the answer, what the bit's visibility is once it is filled,
+    /// which a tracer that writes the masks in place needs.
+    pub known_occluded: bool,
+}
+
+impl Segment {
+    /// Whether the node sees the light once the segment's `answer` is in:
+    /// the static layer open and no dynamic object in the way, as
+    /// [`super::masks::NodeMask::visible`] folds the two layers (the bit
+    /// is then valid, as the fill leaves every bit it is given).
+    pub fn sees(&self, answer: &SegmentAnswer) -> bool {
+        let open = if self.test_static {
+            !answer.static_blocked
+        } else {
+            self.known_visible
+        };
+        let occluded = if self.test_dynamic {
+            answer.dynamic_blocked
+        } else {
+            self.known_occluded
+        };
+        open && !occluded
+    }
 }
 
 /// What the tracer found for one segment.
@@ -64,6 +90,15 @@ impl Place {
     }
 }
 
+impl From<&Segment> for Place {
+    fn from(segment: &Segment) -> Place {
+        Place {
+            slot: segment.node,
+            light: segment.light,
+        }
+    }
+}
+
 /// A frame's fill: per demanded brick (in the demand's order), the bits
 /// shafts settled and the segments left for the tracer. Kept brick by
 /// brick, so that the tracer's records are made and the answers merged
@@ -79,8 +114,6 @@ pub struct SegmentFill {
 #[derive(Clone, Debug, Default)]
 struct BrickFill {
     segments: Vec<Segment>,
-    /// Per segment, where its bits go.
-    places: Vec<Place>,
     /// Static bits a clear shaft settled visible, and dynamic bits one
     /// settled unblocked.
     static_clear: Vec<Place>,
@@ -90,11 +123,20 @@ struct BrickFill {
 
 impl SegmentFill {
     /// The segments, in brick, node and light order, each as `record`
-    /// makes it for the tracer.
-    pub fn records<T: Send>(&self, record: impl Fn(&Segment) -> T + Sync + Send) -> Vec<T> {
-        (self.bricks.par_iter())
-            .flat_map_iter(|brick| brick.segments.iter().map(&record))
+    /// makes it for the tracer from the brick's index (in the demand's
+    /// order) and the segment.
+    pub fn records<T: Send>(&self, record: impl Fn(usize, &Segment) -> T + Sync + Send) -> Vec<T> {
+        (self.bricks.par_iter().enumerate())
+            .flat_map_iter(|(index, brick)| {
+                let record = &record;
+                (brick.segments.iter()).map(move |segment| record(index, segment))
+            })
             .collect()
+    }
+
+    /// How many bricks the fill has segments or shafts for: the demand's.
+    pub fn bricks(&self) -> usize {
+        self.bricks.len()
     }
 
     /// How many segments there are.
@@ -112,6 +154,7 @@ struct WordBits {
     test_static: Vec<u64>,
     known_visible: Vec<u64>,
     test_dynamic: Vec<u64>,
+    known_occluded: Vec<u64>,
 }
 
 impl LightMesh {
@@ -150,17 +193,20 @@ impl LightMesh {
                 test_static: vec![0; BRICK_NODES],
                 known_visible: vec![0; BRICK_NODES],
                 test_dynamic: vec![0; BRICK_NODES],
+                known_occluded: vec![0; BRICK_NODES],
             };
             for slot in 0..BRICK_NODES {
                 let needed = brick.needed[slot * words + word];
-                let ((visible, valid), (_, dynamic_valid)) = stored.map_or(((0, 0), (0, 0)), |b| {
-                    let mask = self.masks.slot_mask(b, slot);
-                    (mask.static_layer(word), mask.dynamic_layer(word))
-                });
+                let ((visible, valid), (occluded, dynamic_valid)) =
+                    stored.map_or(((0, 0), (0, 0)), |b| {
+                        let mask = self.masks.slot_mask(b, slot);
+                        (mask.static_layer(word), mask.dynamic_layer(word))
+                    });
                 bits.test_static[slot] = needed & !valid;
                 bits.known_visible[slot] = visible & valid;
                 bits.test_dynamic[slot] =
                     needed & !dynamic_valid & (bits.test_static[slot] | bits.known_visible[slot]);
+                bits.known_occluded[slot] = occluded & dynamic_valid;
             }
             let light = |bit: usize| &lights[word * 64 + bit];
             let place = |slot: usize, bit: usize| Place {
@@ -202,16 +248,36 @@ impl LightMesh {
                     let at = 1u64 << bit;
                     fill.segments.push(Segment {
                         origin,
+                        node: slot as u16,
                         light: (word * 64 + bit) as u32,
                         test_static: bits.test_static[slot] & at != 0,
                         known_visible: bits.known_visible[slot] & at != 0,
                         test_dynamic: bits.test_dynamic[slot] & at != 0,
+                        known_occluded: bits.known_occluded[slot] & at != 0,
                     });
-                    fill.places.push(place(slot, bit));
                 }
             }
         }
         fill
+    }
+
+    /// Records the bits `fill`'s shafts settled, and makes every brick
+    /// with segments in the store, ahead of the tracer's answers: a tracer
+    /// that writes the masks in place (the GPU's pool) needs each brick it
+    /// writes to have its slot, holding the shafts' bits, before it runs.
+    /// [`LightMesh::merge_segments`] records those bits again with the
+    /// answers, which leaves them as they are.
+    pub fn settle_shafts(&mut self, demand: &Demand, fill: &SegmentFill) {
+        let words = demand.words;
+        let updates: Vec<LayerUpdate> = (fill.bricks.par_iter())
+            .map(|brick| brick.shaft_update(words))
+            .collect();
+        for ((demanded, brick), update) in demand.bricks.iter().zip(&fill.bricks).zip(updates) {
+            self.masks.merge_brick(demanded.brick, &update);
+            if !brick.segments.is_empty() {
+                self.masks.hold(demanded.brick);
+            }
+        }
     }
 
     /// Records the shafts' bits and the tracer's `answers` (parallel to
@@ -267,19 +333,10 @@ impl BrickFill {
     /// The brick's update from its shafts and `answers` (parallel to its
     /// segments), with `words` light words per node.
     fn merge(&self, demanded: &BrickDemand, answers: &[SegmentAnswer], words: usize) -> BrickMerge {
-        let mut update = LayerUpdate::zeroed(BRICK_NODES * words);
+        let mut update = self.shaft_update(words);
         let mut segments = 0;
-        for place in &self.static_clear {
-            let (word, bit) = place.locate(words);
-            update.static_computed[word] |= bit;
-            update.static_visible[word] |= bit;
-        }
-        for place in &self.dynamic_clear {
-            let (word, bit) = place.locate(words);
-            update.dynamic_computed[word] |= bit;
-        }
-        for ((segment, answer), place) in self.segments.iter().zip(answers).zip(&self.places) {
-            let (word, bit) = place.locate(words);
+        for (segment, answer) in self.segments.iter().zip(answers) {
+            let (word, bit) = Place::from(segment).locate(words);
             if segment.test_static {
                 segments += 1;
                 update.static_computed[word] |= bit;
@@ -316,6 +373,21 @@ impl BrickFill {
 }
 
 impl BrickFill {
+    /// The brick's update from its clear shafts alone.
+    fn shaft_update(&self, words: usize) -> LayerUpdate {
+        let mut update = LayerUpdate::zeroed(BRICK_NODES * words);
+        for place in &self.static_clear {
+            let (word, bit) = place.locate(words);
+            update.static_computed[word] |= bit;
+            update.static_visible[word] |= bit;
+        }
+        for place in &self.dynamic_clear {
+            let (word, bit) = place.locate(words);
+            update.dynamic_computed[word] |= bit;
+        }
+        update
+    }
+
     /// Whether the shaft from `members`' box to `light` is clear by
     /// `is_clear`; only groups of [`MIN_SHAFT_NODES`] or more towards a
     /// light with a position are worth a shaft.
@@ -338,5 +410,117 @@ impl BrickFill {
             });
         self.shafts += 1;
         is_clear(&Shaft::new(min, max, apex))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::IVec3;
+
+    use super::*;
+    use crate::lightmesh::demand::BrickDemand;
+    use crate::lightmesh::lattice::Lattice;
+
+    /// The rule the GPU's fill writes the pool by (`fill_segments.wgsl`)
+    /// is the store's fold of what the merge records: over every state a
+    /// bit can be in before its fill (both layers, valid or not) and every
+    /// answer its segment can get, [`Segment::sees`] is the bit the store
+    /// then holds, and the bit is valid.
+    #[test]
+    fn a_segment_sees_what_the_store_folds_once_its_answer_is_merged() {
+        let mut cases = Vec::new();
+        for state in 0..16u32 {
+            let [static_valid, static_visible, dynamic_valid, dynamic_occluded] =
+                [0, 1, 2, 3].map(|bit| state >> bit & 1 == 1);
+            if static_visible && !static_valid || dynamic_occluded && !dynamic_valid {
+                continue; // the store never holds such a bit
+            }
+            let test_static = !static_valid;
+            let known_visible = static_valid && static_visible;
+            let test_dynamic = !dynamic_valid && (test_static || known_visible);
+            if !test_static && !test_dynamic {
+                continue; // nothing to fill
+            }
+            for static_blocked in [false, true] {
+                if static_blocked && !test_static {
+                    continue;
+                }
+                let open = if test_static {
+                    !static_blocked
+                } else {
+                    known_visible
+                };
+                for dynamic_blocked in [false, true] {
+                    let dynamic_tested = open && test_dynamic;
+                    if dynamic_blocked && !dynamic_tested {
+                        continue;
+                    }
+                    let prior = [
+                        static_valid,
+                        static_visible,
+                        dynamic_valid,
+                        dynamic_occluded,
+                    ];
+                    let answer = SegmentAnswer {
+                        static_blocked,
+                        dynamic_tested,
+                        dynamic_blocked,
+                    };
+                    cases.push((prior, [test_static, known_visible, test_dynamic], answer));
+                }
+            }
+        }
+        let lights = 64;
+        let mut mesh = LightMesh::new(Lattice::new(0.2), 2.5, lights, 1 << 30);
+        let mut prior_bits = LayerUpdate::zeroed(BRICK_NODES);
+        let mut needed = vec![0u64; BRICK_NODES];
+        let mut brick = BrickFill::default();
+        for (index, (prior, flags, _)) in cases.iter().enumerate() {
+            let (node, light) = (index / lights, index % lights);
+            let bit = 1u64 << light;
+            let set = |on: bool| if on { bit } else { 0 };
+            prior_bits.static_computed[node] |= set(prior[0]);
+            prior_bits.static_visible[node] |= set(prior[1]);
+            prior_bits.dynamic_computed[node] |= set(prior[2]);
+            prior_bits.dynamic_occluded[node] |= set(prior[3]);
+            needed[node] |= bit;
+            brick.segments.push(Segment {
+                origin: Vec3::ZERO,
+                node: node as u16,
+                light: light as u32,
+                test_static: flags[0],
+                known_visible: flags[1],
+                test_dynamic: flags[2],
+                known_occluded: prior[2] && prior[3],
+            });
+        }
+        mesh.masks.merge_brick(IVec3::ZERO, &prior_bits);
+        let demand = Demand {
+            bricks: vec![BrickDemand {
+                brick: IVec3::ZERO,
+                needed: needed.into(),
+            }],
+            words: 1,
+            ..Demand::default()
+        };
+        let fill = SegmentFill {
+            bricks: vec![brick],
+            shafts: 0,
+        };
+        let answers: Vec<SegmentAnswer> = cases.iter().map(|case| case.2).collect();
+        mesh.merge_segments(&demand, &fill, &answers, &mut LightMeshStats::default());
+        let segments = &fill.bricks[0].segments;
+        // A missing static bit with the dynamic one missing (3 answers) or
+        // known either way (2 each), and a known-visible node's missing
+        // dynamic bit (2).
+        assert_eq!(segments.len(), 9);
+        for (segment, answer) in segments.iter().zip(&answers) {
+            let node = join(IVec3::ZERO, segment.node as usize);
+            assert_eq!(
+                mesh.masks.get(node, segment.light as usize),
+                Some(segment.sees(answer)),
+                "{segment:?}, {answer:?}"
+            );
+        }
     }
 }

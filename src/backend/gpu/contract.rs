@@ -178,13 +178,17 @@ contract! {
     // A fill segment's flags (`fill_segments.wgsl`, `fill.rs`): the low
     // bits of its `light_flags`, the light's index above them.
     /// The bits of `light_flags` that hold the flags.
-    FILL_FLAG_BITS: u32 = 3;
+    FILL_FLAG_BITS: u32 = 4;
     /// Trace the segment against the static structure.
     TEST_STATIC: u32 = 1;
     /// The node's static bit is known visible.
     KNOWN_VISIBLE: u32 = 2;
     /// Trace the segment against the dynamic objects where it is open.
     TEST_DYNAMIC: u32 = 4;
+    /// The node's dynamic bit is known occluded (where it is not traced):
+    /// what the fill writes into the pool when the static test finds the
+    /// node open.
+    KNOWN_OCCLUDED: u32 = 8;
     // A fill segment's answer: ANSWER_BITS bits, ANSWERS_PER_WORD to a
     // word, segment i's at bit ANSWER_BITS * (i % ANSWERS_PER_WORD).
     /// The bits of one segment's answer.
@@ -219,15 +223,15 @@ contract! {
     /// none.
     NONE: u32 = u32::MAX;
 
-    // The mask pool's slots (`mask_pool.rs`): per node, the groups of
-    // light words.
+    // The mask pool's slots (`mask_pool.rs`): per node and light word,
+    // GROUPS words side by side, so that the fill writes one pair.
     /// Nodes of a brick.
     BRICK_NODES: u32 = masks::BRICK_NODES as u32;
-    /// Groups of light words per node.
+    /// Words per node and light word.
     GROUPS: u32 = 2;
-    /// The group of the lights a node sees.
+    /// The word of the lights a node sees.
     VISIBLE: u32 = 0;
-    /// The group of which of those bits are valid.
+    /// The word of which of those bits are valid.
     VALID: u32 = 1;
 
     // The light mesh's geometry, as the CPU bounds it.

@@ -1,26 +1,31 @@
-//! The light mesh's fill on the GPU: the frame's missing (node, light)
+//! The light mesh's fill on the GPU: the level's missing (node, light)
 //! bits as one segment each (`lightmesh::segments`), traced in a compute
 //! pass (`fill_segments.wgsl`) against the static structure and the
 //! dynamic objects with the CPU's watertight test, so the bits are the
 //! CPU fill's. The CPU's shafts and remembered walls save it segments; a
-//! GPU traces them all side by side instead. What crosses is lean: 16
+//! GPU traces them all side by side instead. What crosses is lean: 20
 //! bytes a segment up, four bits of answer down.
+//!
+//! The pass writes each bit into the mask pool where it belongs, so the
+//! level's shading reads it without the CPU waiting for it; the answers
+//! come back with the CPU's next wait ([`FillAnswers`]), for its store.
 
 use bytemuck::{Pod, Zeroable};
 
 use super::context::{GpuContext, GpuError};
 use super::contract::{
     ANSWERS_PER_WORD, ANSWER_BITS, DYNAMIC_BLOCKED, DYNAMIC_TESTED, FILL_FLAG_BITS, ITEMS,
-    KNOWN_VISIBLE, LIGHTS, STATIC_BLOCKED, TEST_DYNAMIC, TEST_STATIC,
+    KNOWN_OCCLUDED, KNOWN_VISIBLE, LIGHTS, POOL, STATIC_BLOCKED, TEST_DYNAMIC, TEST_STATIC,
 };
 use super::direct::FrameLights;
+use super::mask_pool::{MaskPool, SlotPlace};
 use super::pass::{answer_buffer, Dispatch, WorldPass, WorldUse, BATCH};
-use super::recording::{Downloads, Part, Recording};
+use super::recording::{Downloaded, Downloads, Part, Recording};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use crate::lightmesh::segments::{Segment, SegmentAnswer, SegmentFill};
 
-/// `fill_segments.wgsl`'s `FillSegment`: 16 bytes, since a steady frame
+/// `fill_segments.wgsl`'s `FillSegment`: 20 bytes, since a steady frame
 /// of a fly-through sends a million of them.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -28,10 +33,13 @@ pub struct FillSegment {
     origin: [f32; 3],
     /// The light's index above [`FILL_FLAG_BITS`] bits of flags.
     light_flags: u32,
+    /// The pool's word of the node's lights that holds this light's bit.
+    pool_word: u32,
 }
 
-impl From<&Segment> for FillSegment {
-    fn from(segment: &Segment) -> FillSegment {
+impl FillSegment {
+    /// `segment` of the brick whose slot is `slot`.
+    pub fn new(segment: &Segment, slot: SlotPlace) -> FillSegment {
         let flag = |on: bool, flag: u32| if on { flag } else { 0 };
         debug_assert!(segment.light < u32::MAX >> FILL_FLAG_BITS);
         FillSegment {
@@ -39,15 +47,17 @@ impl From<&Segment> for FillSegment {
             light_flags: segment.light << FILL_FLAG_BITS
                 | flag(segment.test_static, TEST_STATIC)
                 | flag(segment.known_visible, KNOWN_VISIBLE)
-                | flag(segment.test_dynamic, TEST_DYNAMIC),
+                | flag(segment.test_dynamic, TEST_DYNAMIC)
+                | flag(segment.known_occluded, KNOWN_OCCLUDED),
+            pool_word: slot.light_word(segment.node, segment.light),
         }
     }
 }
 
 /// The batches of segments recorded before the CPU waits for their
-/// answers: one wait for a steady frame's million segments, and at most
-/// this many batches' buffers held at once on a cold frame's tens of
-/// millions.
+/// answers where a level has more: a steady frame's million segments
+/// need no wait of their own, and a cold frame's tens of millions hold
+/// at most this many batches' buffers at once.
 const BATCHES_PER_WAIT: usize = 8;
 
 /// The fill's pipeline, made once per run.
@@ -63,14 +73,64 @@ impl FillPass {
                 Entry::FillSegments,
                 WorldUse::Traces,
                 &[LIGHTS],
-                &[],
+                &[POOL],
             ),
         }
     }
 
-    /// Traces `fill`'s segments against `scene` with `lights`, in batches
-    /// recorded [`BATCHES_PER_WAIT`] at a time and waited for together;
-    /// one answer per segment, in order.
+    /// Records the tracing of `fill`'s segments against `scene` with
+    /// `lights`, each bit written into `pool`, where `slots` (one per
+    /// brick of the fill, in its order) place the bricks. Waits only
+    /// between groups of [`BATCHES_PER_WAIT`] batches, where there are
+    /// more; the answers left come back with the CPU's next wait.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        context: &GpuContext,
+        recording: &mut Recording,
+        scene: &GpuScene,
+        lights: &FrameLights,
+        (pool, slots): (&wgpu::Buffer, &[Option<SlotPlace>]),
+        fill: &SegmentFill,
+    ) -> Result<FillAnswers, GpuError> {
+        let segments = fill.records(|brick, segment| {
+            let slot =
+                slots[brick].expect("admitting a level gives each brick with segments a slot");
+            FillSegment::new(segment, slot)
+        });
+        context.traffic.traced(segments.len() as u64);
+        let mut answers = FillAnswers {
+            count: segments.len(),
+            ..FillAnswers::default()
+        };
+        let groups = segments.chunks(BATCH * BATCHES_PER_WAIT).count();
+        for (index, group) in segments.chunks(BATCH * BATCHES_PER_WAIT).enumerate() {
+            context.checked(Entry::FillSegments.name(), || {
+                for batch in group.chunks(BATCH) {
+                    let items = storage(context, "fill segments", batch)?;
+                    let words = batch.len().div_ceil(ANSWERS_PER_WORD as usize);
+                    let out = answer_buffer::<u32>(context, "fill answers", words)?;
+                    let dispatch = Dispatch::new(scene, batch.len()).with_lights(lights.count());
+                    let reads = [(ITEMS, &items), (LIGHTS, lights.buffer()), (POOL, pool)];
+                    (self.pass).record(context, recording.encoder(), dispatch, &reads, &out);
+                    answers.pending.push((out, words));
+                }
+                Ok::<_, GpuError>(())
+            })?;
+            if index + 1 < groups {
+                let mut downloads = Downloads::default();
+                let parts = answers.download(&mut downloads);
+                let why = "a group of the fill's answers, before the next group's buffers";
+                let downloaded = recording.wait(why, downloads)?;
+                answers.keep(&downloaded, parts);
+            }
+        }
+        Ok(answers)
+    }
+
+    /// Traces `fill`'s segments on their own and waits for their answers,
+    /// one per segment in order (their bits go to a scratch pool of the
+    /// fill's bricks): the GPU's fill, for comparing with the CPU's.
     pub fn trace(
         &self,
         context: &GpuContext,
@@ -78,55 +138,70 @@ impl FillPass {
         lights: &FrameLights,
         fill: &SegmentFill,
     ) -> Result<Vec<SegmentAnswer>, GpuError> {
-        let segments = fill.records(|segment| FillSegment::from(segment));
-        let mut answers = Vec::with_capacity(segments.len());
-        for group in segments.chunks(BATCH * BATCHES_PER_WAIT) {
-            let words = context.checked(Entry::FillSegments.name(), || {
-                self.trace_group(context, scene, lights, group)
-            })?;
-            context.traffic.traced(group.len() as u64);
-            answers.extend((0..group.len()).map(|index| {
-                let bits = words[index / ANSWERS_PER_WORD as usize]
+        let light_words = MaskPool::light_words(lights.count() as usize);
+        let slot_words = MaskPool::slot_bytes(light_words) / size_of::<u32>();
+        let slots: Vec<Option<SlotPlace>> = (0..fill.bricks())
+            .map(|brick| Some(SlotPlace::new(brick * slot_words, light_words)))
+            .collect();
+        let scratch = answer_buffer::<u32>(context, "scratch pool", fill.bricks() * slot_words)?;
+        let mut recording = Recording::new(context);
+        let mut answers = self.record(
+            context,
+            &mut recording,
+            scene,
+            lights,
+            (&scratch, &slots),
+            fill,
+        )?;
+        let mut downloads = Downloads::default();
+        let parts = answers.download(&mut downloads);
+        let downloaded = recording.wait("the fill's answers, for comparing", downloads)?;
+        answers.keep(&downloaded, parts);
+        Ok(answers.answers())
+    }
+}
+
+/// The answers of a level's fill: those a wait within the fill brought
+/// back, and the buffers of those still on the GPU, which the CPU's next
+/// wait brings back ([`FillAnswers::download`]).
+#[derive(Default)]
+pub struct FillAnswers {
+    /// [`ANSWERS_PER_WORD`] answers to a word, in the segments' order.
+    words: Vec<u32>,
+    pending: Vec<(wgpu::Buffer, usize)>,
+    /// Segments answered.
+    count: usize,
+}
+
+impl FillAnswers {
+    /// Adds the answers still on the GPU to what a wait brings back.
+    pub fn download<'s>(&'s self, downloads: &mut Downloads<'s>) -> Vec<Part<u32>> {
+        (self.pending.iter())
+            .map(|(buffer, words)| downloads.add(buffer, *words))
+            .collect()
+    }
+
+    /// Keeps what a wait brought back of `parts`.
+    pub fn keep(&mut self, downloaded: &Downloaded, parts: Vec<Part<u32>>) {
+        for part in parts {
+            self.words.extend(downloaded.take(part));
+        }
+        self.pending.clear();
+    }
+
+    /// One answer per segment, in order, once every part is back.
+    pub fn answers(&self) -> Vec<SegmentAnswer> {
+        debug_assert!(self.pending.is_empty(), "answers still on the GPU");
+        (0..self.count)
+            .map(|index| {
+                let bits = self.words[index / ANSWERS_PER_WORD as usize]
                     >> (ANSWER_BITS * (index as u32 % ANSWERS_PER_WORD));
                 SegmentAnswer {
                     static_blocked: bits & STATIC_BLOCKED != 0,
                     dynamic_tested: bits & DYNAMIC_TESTED != 0,
                     dynamic_blocked: bits & DYNAMIC_BLOCKED != 0,
                 }
-            }));
-        }
-        Ok(answers)
-    }
-
-    /// Records `group`'s batches and waits once for their answers,
-    /// [`ANSWERS_PER_WORD`] to a word.
-    fn trace_group(
-        &self,
-        context: &GpuContext,
-        scene: &GpuScene,
-        lights: &FrameLights,
-        group: &[FillSegment],
-    ) -> Result<Vec<u32>, GpuError> {
-        let mut recording = Recording::new(context);
-        let mut batches = Vec::new();
-        for batch in group.chunks(BATCH) {
-            let items = storage(context, "fill segments", batch)?;
-            let words = batch.len().div_ceil(ANSWERS_PER_WORD as usize);
-            let answers = answer_buffer::<u32>(context, "fill answers", words)?;
-            let dispatch = Dispatch::new(scene, batch.len()).with_lights(lights.count());
-            let reads = [(ITEMS, &items), (LIGHTS, lights.buffer())];
-            (self.pass).record(context, recording.encoder(), dispatch, &reads, &answers);
-            batches.push((answers, words));
-        }
-        let mut downloads = Downloads::default();
-        let parts: Vec<Part<u32>> = (batches.iter())
-            .map(|(answers, words)| downloads.add(answers, *words))
-            .collect();
-        let why = "the fill's segments traced, which the CPU merges into its masks";
-        let downloaded = recording.wait(why, downloads)?;
-        Ok(parts
-            .into_iter()
-            .flat_map(|part| downloaded.take(part))
-            .collect())
+            })
+            .collect()
     }
 }

@@ -175,7 +175,7 @@ impl Frame<'_> {
         let downloaded = recording.wait(why, downloads)?;
         let developed = film_parts.developed(&downloaded);
         if let (DirectMethod::LightMesh(light_mesh), Some(counts)) = (method, counts) {
-            light_mesh.counted(&downloaded, counts);
+            light_mesh.downloaded(&downloaded, counts);
         }
         stats.rays.secondary += developed.secondary_rays;
         stats.rays.shadow += developed.other_rays + developed.class_rays.total();

@@ -8,13 +8,15 @@
 //! reaching lights and finds those whose every node already holds valid
 //! bits in the pool; only the others come back (copied out by the pass,
 //! with its flags), for the CPU's demand. The bits they miss are settled
-//! by the CPU fill's shafts where those are clear and traced on the GPU
-//! otherwise ([`super::fill`]); LMM1's enclosure probes run on the CPU;
-//! the pool takes the words of the bricks edited. So
-//! the masks the shader reads are the CPU backend's bit for bit, and what
-//! runs on the GPU is the per-point work: the half-ball, LMM's
-//! point-to-node segments, the counts and Omega, and formula (1) where the
-//! set is empty.
+//! by the CPU fill's shafts where those are clear, and LMM1's enclosure
+//! probes run on the CPU; the pool takes the words of the bricks edited.
+//! The bits left are traced on the GPU ([`super::fill`]), which writes
+//! them into the pool itself: the level's shading follows without a wait,
+//! and the answers reach the CPU's store at its next wait (the next
+//! level's coverage, or the band's end). So the masks the shader reads are
+//! the CPU backend's bit for bit, and what runs on the GPU is the
+//! per-point work: the half-ball, LMM's point-to-node segments, the
+//! counts and Omega, and formula (1) where the set is empty.
 
 use std::time::Instant;
 
@@ -27,7 +29,7 @@ use super::contract::{
     LIGHT_MESH_COUNTERS, LOOPS_CUT_SHORT, POOL, REACH,
 };
 use super::direct::FrameLights;
-use super::fill::FillPass;
+use super::fill::{FillAnswers, FillPass};
 use super::layered::{LayeredPass, PointLayers};
 use super::mask_pool::MaskPool;
 use super::pass::{answer_buffer, Dispatch, WorldPass, WorldUse};
@@ -36,7 +38,9 @@ use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use super::surface::{LevelBuffers, SurfacePoint};
 use crate::backend::RenderError;
+use crate::lightmesh::demand::Demand;
 use crate::lightmesh::interpolate::PointCounts;
+use crate::lightmesh::segments::SegmentFill;
 use crate::lightmesh::{LightMesh, LightMeshStats};
 use crate::render::omega::LightLanes;
 use crate::render::shadow_split::{FrameMethod, LightRole};
@@ -105,6 +109,23 @@ pub struct LightMeshShading<'m> {
     counts: wgpu::Buffer,
     /// The counters as the last band's wait brought them back.
     counted: Counters,
+    /// The last level's fill, while its answers are on the GPU.
+    pending: Option<PendingFill>,
+}
+
+/// A level's fill whose bits the GPU has written into the pool and whose
+/// answers the CPU's store has not taken yet.
+struct PendingFill {
+    demand: Demand,
+    fill: SegmentFill,
+    answers: FillAnswers,
+}
+
+/// Where a wait's downloads hold the light mesh's part: formula (2)'s
+/// counters (at a band's end) and a fill's answers.
+pub struct LightMeshParts {
+    counts: Part<Counters>,
+    fill: Vec<Part<u32>>,
 }
 
 /// The reaching lights of a level's points, as the coverage pass made
@@ -130,17 +151,18 @@ impl<'m> LightMeshShading<'m> {
             work: LightMeshStats::default(),
             counts: answer_buffer::<Counters>(context, "light-mesh counters", 1)?,
             counted: [0; LIGHT_MESH_COUNTERS as usize],
+            pending: None,
         })
     }
 
-    /// Makes every mask bit `level`'s points need valid in the light mesh
-    /// and resident in the pool: the coverage pass finds the points the
-    /// pool does not serve yet, and only those come back for the CPU's
-    /// demand, fill and enclosure stages (as the CPU backend runs them):
-    /// the level waits for its coverage flags and the copies of those
-    /// points the pass had room for (where it had too little, once more
-    /// for a gather of them all), and where some points are not served,
-    /// for the fill's segments. Returns the points' reaching lights.
+    /// Makes every mask bit `level`'s points need valid and resident in
+    /// the pool before their shading, recorded after this: the coverage
+    /// pass finds the points the pool does not serve yet, and only those
+    /// come back for the CPU's demand, shafts and enclosure stages (as the
+    /// CPU backend runs them), after the level's one wait (where the pass
+    /// had too little room to copy them all, one more gathers them); the
+    /// bits left are traced on the GPU, into the pool, with no wait.
+    /// Returns the points' reaching lights.
     #[allow(clippy::too_many_arguments)]
     pub fn prepare(
         &mut self,
@@ -175,9 +197,7 @@ impl<'m> LightMeshShading<'m> {
 
         let start = Instant::now();
         let fill = (self.mesh).fill_segments(&demand, &job.frame.lights, job.world)?;
-        let answers = fill_pass.trace(context, scene, lights, &fill)?;
-        self.mesh
-            .merge_segments(&demand, &fill, &answers, &mut self.work);
+        self.mesh.settle_shafts(&demand, &fill);
         stats.add_stage_time("fill", start.elapsed().as_secs_f64());
 
         if !p2n {
@@ -196,7 +216,43 @@ impl<'m> LightMeshShading<'m> {
         self.work.bricks_inserted += upload.inserted;
         self.work.bricks_evicted += upload.evicted;
         stats.add_stage_time("upload", start.elapsed().as_secs_f64());
+
+        let start = Instant::now();
+        let slots = self.pool.places(&bricks);
+        let (pool, _) = self.pool.buffers();
+        let answers = fill_pass.record(context, recording, scene, lights, (pool, &slots), &fill)?;
+        self.pending = Some(PendingFill {
+            demand,
+            fill,
+            answers,
+        });
+        stats.add_stage_time("fill", start.elapsed().as_secs_f64());
         Ok(reach)
+    }
+
+    /// Gives the CPU's store the last fill's answers, which a wait brought
+    /// back (`parts` of `downloaded`): the pool holds those bits already,
+    /// so nothing goes up.
+    fn settle_fill(&mut self, downloaded: &Downloaded, parts: Vec<Part<u32>>) {
+        let Some(mut pending) = self.pending.take() else {
+            return;
+        };
+        pending.answers.keep(downloaded, parts);
+        let PendingFill {
+            demand,
+            fill,
+            answers,
+        } = pending;
+        let answers = answers.answers();
+        (self.mesh).merge_segments(&demand, &fill, &answers, &mut self.work);
+        let bricks: Vec<IVec3> = demand.bricks.iter().map(|brick| brick.brick).collect();
+        self.pool.written_on_gpu(self.mesh.masks(), &bricks);
+    }
+
+    /// Adds the last fill's answers, where they are still on the GPU, to
+    /// what a wait brings back.
+    fn download_fill<'s>(&'s self, downloads: &mut Downloads<'s>) -> Vec<Part<u32>> {
+        (self.pending.as_ref()).map_or_else(Vec::new, |pending| pending.answers.download(downloads))
     }
 
     /// Records `level`'s coverage pass and waits for what the CPU needs
@@ -238,8 +294,12 @@ impl<'m> LightMeshShading<'m> {
         let mut downloads = Downloads::default();
         let flags_part = downloads.add::<u32>(&flags, flag_words);
         let gathered_part = downloads.add::<SurfacePoint>(&gathered, room);
-        let why = "the coverage flags and the points the pool does not serve, for the CPU's demand";
+        let fill_parts = self.download_fill(&mut downloads);
+        let why =
+            "the coverage flags and the points the pool does not serve, for the CPU's demand \
+                   (and the last level's fill answers, for its store)";
         let downloaded = recording.wait(why, downloads)?;
+        self.settle_fill(&downloaded, fill_parts);
         let flags = downloaded.take(flags_part);
         let (unserved, read_slots) = flags[..flag_words - 1].split_at(point_words);
         let count = flags[flag_words - 1] as usize;
@@ -313,27 +373,40 @@ impl<'m> LightMeshShading<'m> {
         (passes.shade).record(context, encoder, dispatch, &reads, direct, layers);
     }
 
-    /// Adds formula (2)'s counters to what a band's wait brings back.
-    pub fn download<'s>(&'s self, downloads: &mut Downloads<'s>) -> Part<Counters> {
-        downloads.add(&self.counts, 1)
+    /// Adds formula (2)'s counters and the last fill's answers to what a
+    /// band's wait brings back.
+    pub fn download<'s>(&'s self, downloads: &mut Downloads<'s>) -> LightMeshParts {
+        LightMeshParts {
+            counts: downloads.add(&self.counts, 1),
+            fill: self.download_fill(downloads),
+        }
     }
 
-    /// Keeps the counters a band's wait brought back: the frame's so far.
-    pub fn counted(&mut self, downloaded: &Downloaded, part: Part<Counters>) {
-        if let Some(&counts) = downloaded.take(part).first() {
+    /// Keeps what a band's wait brought back: the frame's counters so far,
+    /// and the last fill's answers, for the store.
+    pub fn downloaded(&mut self, downloaded: &Downloaded, parts: LightMeshParts) {
+        if let Some(&counts) = downloaded.take(parts.counts).first() {
             self.counted = counts;
         }
+        self.settle_fill(downloaded, parts.fill);
     }
 
     /// The frame's light-mesh statistics, once its `shading_points` are
     /// shaded and its last band's counters came back; the fill's
     /// node-to-light segments go to the shadow rays.
     pub fn finish(
-        self,
+        mut self,
         context: &GpuContext,
         job: &FrameJob,
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
+        if self.pending.is_some() {
+            let mut downloads = Downloads::default();
+            let parts = self.download_fill(&mut downloads);
+            let why = "the last fill's answers, which no band's wait brought back";
+            let downloaded = Recording::new(context).wait(why, downloads)?;
+            self.settle_fill(&downloaded, parts);
+        }
         let counts = self.counted;
         let points = counts[LOOPS_CUT_SHORT as usize];
         if points > 0 {

@@ -2,9 +2,10 @@
 //! and a directory that finds a brick's slot by its coordinates.
 //!
 //! A slot holds one brick of the CPU's [`MaskStore`] as the GPU reads it:
-//! per node, which lights it sees and which of those bits are valid (the
-//! store's two layers folded as `NodeMask::visible` and `valid` fold
-//! them), in u32 words of 32 lights; then the brick's enclosure flags.
+//! per node and u32 word of 32 lights, which of them it sees and which of
+//! those bits are valid, side by side (the store's two layers folded as
+//! `NodeMask::visible` and `valid` fold them), so that the GPU's fill
+//! writes a bit's pair of words; then the brick's enclosure flags.
 //! Folding halves the store's four groups, and u32 words halve them again
 //! for scenes of up to 32 lights, so more bricks fit the adapter's
 //! largest binding.
@@ -135,6 +136,31 @@ pub struct MaskPool {
 /// one wait brings them back with the flags; where more are left, a
 /// gather brings them back after a second wait.
 const GATHER_MARGIN: usize = 1024;
+
+/// Where a resident brick's words lie in the pool, for a pass that
+/// writes its bits in place (the GPU's fill).
+#[derive(Clone, Copy, Debug)]
+pub struct SlotPlace {
+    start: u32,
+    light_words: u32,
+}
+
+impl SlotPlace {
+    /// A slot whose first word is `start`, with `light_words` u32 light
+    /// words per node.
+    pub fn new(start: usize, light_words: usize) -> SlotPlace {
+        SlotPlace {
+            start: start as u32,
+            light_words: light_words as u32,
+        }
+    }
+
+    /// The pool word of `node`'s pair ([`super::contract::VISIBLE`],
+    /// [`super::contract::VALID`]) for the u32 light word of `light`.
+    pub fn light_word(&self, node: u16, light: u32) -> u32 {
+        self.start + (node as u32 * self.light_words + light / 32) * GROUPS
+    }
+}
 
 /// What one update uploaded, for the stats.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -319,6 +345,39 @@ impl MaskPool {
         !changed.is_empty()
     }
 
+    /// Where `bricks`' slots are, for a pass that writes their bits in
+    /// place; None for a brick that has none.
+    pub fn places(&self, bricks: &[IVec3]) -> Vec<Option<SlotPlace>> {
+        let slot_words = self.slot_words();
+        (bricks.iter())
+            .map(|brick| {
+                let resident = self.resident.get(brick)?;
+                let start = resident.slot as usize * slot_words;
+                Some(SlotPlace::new(start, self.light_words))
+            })
+            .collect()
+    }
+
+    /// Takes the words a pass wrote into `bricks`' slots on the GPU as
+    /// held, now that `store` holds the same bits: each resident brick's
+    /// mirror becomes its fold, at the store's revision, and nothing
+    /// goes up.
+    pub fn written_on_gpu(&mut self, store: &MaskStore, bricks: &[IVec3]) {
+        let slot_words = self.slot_words();
+        for brick in bricks {
+            let (Some(resident), Some(revision), Some(words)) = (
+                self.resident.get_mut(brick),
+                store.brick_revision(*brick),
+                fold_brick(store, *brick),
+            ) else {
+                continue;
+            };
+            resident.revision = revision;
+            let start = resident.slot as usize * slot_words;
+            self.mirror[start..start + slot_words].copy_from_slice(&words);
+        }
+    }
+
     /// The bricks whose slots do not hold their fold of `store`, as the
     /// GPU holds them now (read back; a test's check of the mirror and of
     /// every edit written); empty where the pool mirrors another store.
@@ -499,8 +558,10 @@ fn fold_brick(store: &MaskStore, brick: IVec3) -> Option<Vec<u32>> {
     for slot in 0..BRICK_NODES {
         let mask = store.slot_mask(bits, slot);
         let half = |bits: u64, word: usize| (bits >> (32 * (word % 2))) as u32;
-        words.extend((0..light_words).map(|word| half(mask.visible(word / 2), word)));
-        words.extend((0..light_words).map(|word| half(mask.valid(word / 2), word)));
+        for word in 0..light_words {
+            words.push(half(mask.visible(word / 2), word));
+            words.push(half(mask.valid(word / 2), word));
+        }
     }
     let BrickEnclosure { known, enclosed } = store.enclosure(brick);
     words.extend_from_slice(bytemuck::cast_slice(&known));

@@ -461,7 +461,7 @@ mod tests {
                 size_of::<EnvironmentRecord>(),
                 vec![0, 12, 16, 28],
             ),
-            ("FillSegment", size_of::<FillSegment>(), vec![0, 12]),
+            ("FillSegment", size_of::<FillSegment>(), vec![0, 12, 16]),
             (
                 "MeshHeader",
                 size_of::<MeshHeader>(),

@@ -5,18 +5,28 @@
 // against the dynamic objects. The segments are the CPU's shadow rays
 // from the node (`RenderLight::shadow_ray`) and the traversal is the
 // CPU's test, so every bit is the CPU fill's.
+//
+// Each answer goes to two places: into the mask pool, where the bit's
+// pair of words is (so the level's shading reads it without the CPU), and
+// into `answers`, which the CPU merges into its store at its next wait.
 
 struct FillSegment {
     origin: array<f32, 3>,
     // The light's index above FILL_FLAG_BITS bits of TEST_STATIC |
-    // KNOWN_VISIBLE | TEST_DYNAMIC (`contract.rs`); the answer has
-    // STATIC_BLOCKED | DYNAMIC_TESTED | DYNAMIC_BLOCKED.
+    // KNOWN_VISIBLE | TEST_DYNAMIC | KNOWN_OCCLUDED (`contract.rs`); the
+    // answer has STATIC_BLOCKED | DYNAMIC_TESTED | DYNAMIC_BLOCKED.
     light_flags: u32,
+    // The pool's word of the node's lights that holds this one's bit:
+    // VISIBLE and VALID are its pair of words.
+    pool_word: u32,
 }
 
 @group(0) @binding(ITEMS) var<storage, read> segments: array<FillSegment>;
 // ANSWERS_PER_WORD answers a word, each ANSWER_BITS bits.
 @group(0) @binding(ANSWERS) var<storage, read_write> answers: array<atomic<u32>>;
+// The mask pool's slots (`mask_pool.rs`). Each segment owns its bit, so
+// the atomics only keep the bits of one word from overwriting each other.
+@group(0) @binding(POOL) var<storage, read_write> pool: array<atomic<u32>>;
 
 @compute @workgroup_size(WORKGROUP)
 fn fill_segments(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -39,11 +49,21 @@ fn fill_segments(@builtin(global_invocation_id) id: vec3<u32>) {
         open = found.mesh == NO_MESH;
         answer |= select(STATIC_BLOCKED, 0u, open);
     }
+    var occluded = (flags & KNOWN_OCCLUDED) != 0u;
     if (flags & TEST_DYNAMIC) != 0u && open {
         var found = no_hit();
         walk_dynamic(origin, direction, t_max, true, &found);
-        answer |= DYNAMIC_TESTED | select(0u, DYNAMIC_BLOCKED, found.mesh != NO_MESH);
+        occluded = found.mesh != NO_MESH;
+        answer |= DYNAMIC_TESTED | select(0u, DYNAMIC_BLOCKED, occluded);
     }
     let shift = ANSWER_BITS * (index % ANSWERS_PER_WORD);
     atomicOr(&answers[index / ANSWERS_PER_WORD], answer << shift);
+    // `Segment::sees`: the bit as the CPU's store will fold it.
+    let bit = 1u << ((segment.light_flags >> FILL_FLAG_BITS) % 32u);
+    if open && !occluded {
+        atomicOr(&pool[segment.pool_word + VISIBLE], bit);
+    } else {
+        atomicAnd(&pool[segment.pool_word + VISIBLE], ~bit);
+    }
+    atomicOr(&pool[segment.pool_word + VALID], bit);
 }

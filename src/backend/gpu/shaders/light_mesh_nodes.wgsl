@@ -32,9 +32,10 @@ struct Directory {
 
 @group(0) @binding(DIRECTORY) var<storage, read> directory: Directory;
 @group(0) @binding(POOL) var<storage, read> pool: array<u32>;
-// A slot holds BRICK_NODES nodes of GROUPS groups of light words: the
-// lights a node sees (VISIBLE), then which of those bits are valid
-// (VALID). A half-ball's box spans at most MAX_SPAN nodes on each axis.
+// A slot holds BRICK_NODES nodes, each a pair of words (GROUPS) per light
+// word: the lights the node sees (VISIBLE), and which of those bits are
+// valid (VALID). A half-ball's box spans at most MAX_SPAN nodes on each
+// axis.
 // 8 f32 epsilons, 2^-20.
 const ON_PLANE_EPSILONS: f32 = 9.5367431640625e-7;
 
@@ -206,7 +207,7 @@ fn group_word(mask: NodeMask, group: u32, word: u32) -> u32 {
     if !mask.found {
         return 0u;
     }
-    return pool[mask.base + group * directory.header.light_words + word];
+    return pool[mask.base + word * GROUPS + group];
 }
 
 // `NodeMask::visible`: the static bit set and no dynamic blocker.
