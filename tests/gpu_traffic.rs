@@ -5,9 +5,10 @@
 //! length stays on the GPU, which dispatches the level's passes
 //! indirectly and counts its rays with the film's counters. A light-mesh
 //! frame waits once more per level, for the coverage flags and the points
-//! the pool does not serve, which the demand on the CPU needs, and where
-//! some are not served, for their fill's segments; demand and fill on
-//! the GPU (issue 33) are what remove those.
+//! the pool does not serve, which the demand on the CPU needs; their
+//! fill is traced into the pool on the GPU, and its answers come back
+//! with the next wait. Demand on the GPU (issue 33) is what removes the
+//! coverage's wait.
 
 mod common;
 
@@ -206,4 +207,28 @@ fn a_light_mesh_frame_waits_for_its_coverage_flags_and_its_band() {
     use lmanim::backend::gpu::mask_pool::MaskPool;
     let brick_bytes = MaskPool::slot_bytes(MaskPool::light_words(2)) as u64;
     assert!(steady.bytes_up < brick_bytes, "{steady:?}");
+}
+
+/// The showcase fly-through, its cars driving: after the first frame, a
+/// frame waits twice (its coverage, its band), though its new view and
+/// the cars leave bits to fill.
+#[test]
+fn a_city_fly_through_frame_waits_twice() {
+    let Some((gpu, _)) = common::gpu::backend_to_compare() else {
+        return;
+    };
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("animations/city.gltf");
+    let city = lmanim::import::load(&path).expect("import animations/city.gltf");
+    let mut settings = settings(160, 90);
+    settings.method = Method::Lmm1;
+    let frames = frames_on(gpu, city, &settings, &[0.0, 1.0 / 24.0, 2.0 / 24.0]);
+    for stats in &frames[1..] {
+        let gpu = traffic(stats);
+        let work = stats.lightmesh.expect("a light-mesh frame");
+        assert!(
+            gpu.segments_traced > 0 && work.points_demanded > 0,
+            "{gpu:?}"
+        );
+        assert_eq!(gpu.waits, 2, "{gpu:?}");
+    }
 }

@@ -2,8 +2,9 @@
 //! demand asks for and are not known, in parallel over bricks. A missing
 //! static bit is a segment from the node to the light against the static
 //! structure; where that is clear and the dynamic bit is missing, a second
-//! segment against the dynamic objects only. This is the only place node
-//! masks are written.
+//! segment against the dynamic objects only. This is the CPU backend's
+//! fill; the GPU backend's is [`super::segments`], and who else writes
+//! the masks is in [`super::masks`].
 //!
 //! Most of a brick's nodes see a light alike, so a light's missing nodes in
 //! a brick are first settled together: if the shaft from their bounding box

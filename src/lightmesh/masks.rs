@@ -22,13 +22,18 @@
 //! - the disk cache's import (`super::cache`, when the mesh is made) sets
 //!   static bits an earlier run computed;
 //! - the fill sets the bits the frame demanded: on the CPU
-//!   (`super::fill`), or merging the answers of the GPU's fill
-//!   (`super::segments`);
-//! - LMM1's enclosure stage (`super::enclosure`, after the fill) sets
-//!   enclosure flags, never a visibility bit.
+//!   (`super::fill`), or for the GPU's fill (`super::segments`) in two
+//!   steps, the shafts' bits before the GPU traces the rest (with the
+//!   bricks it will write made, [`MaskStore::hold`]) and the GPU's answers
+//!   when they come back;
+//! - LMM1's enclosure stage (`super::enclosure`) sets enclosure flags,
+//!   never a visibility bit.
 //!
 //! A bit set by any of them has the value the fill would compute, which
-//! is what keeps reuse exact. The GPU's mask pool only mirrors the store.
+//! is what keeps reuse exact. The GPU's mask pool mirrors the store; the
+//! GPU's fill writes its bits there first, by the rule the store folds
+//! them by (`super::segments::Segment::sees`), and the store takes the
+//! same bits at the CPU's next wait, before anything reads it.
 
 use glam::IVec3;
 use rustc_hash::FxHashMap;
