@@ -1244,8 +1244,10 @@ fn gpu_fill_bits_equal_the_cpu_fill() {
     let answers = {
         let passes = gpu.passes_for(&world).expect("upload");
         let frame_lights = FrameLights::upload(passes.context, &lights).expect("lights");
+        let bricks: Vec<IVec3> = demand.bricks.iter().map(|brick| brick.brick).collect();
+        let place = (&on_gpu.lattice, &bricks[..]);
         (passes.fill)
-            .trace(passes.context, passes.scene, &frame_lights, &fill)
+            .trace(passes.context, passes.scene, &frame_lights, place, &fill)
             .expect("GPU fill")
     };
     let mut gpu_stats = LightMeshStats::default();

@@ -28,9 +28,7 @@ use crate::render::light::RenderLight;
 /// One node-to-light segment of the fill.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Segment {
-    /// The node's position.
-    pub origin: Vec3,
-    /// The node's slot in its brick.
+    /// The node's slot in its brick (the tracer places it on the lattice).
     pub node: u16,
     pub light: u32,
     /// The static bit is missing: test the static structure.
@@ -243,11 +241,10 @@ impl LightMesh {
                     }
                 }
             }
-            for (slot, &origin) in positions.iter().enumerate() {
+            for slot in 0..BRICK_NODES {
                 for bit in set_bits(bits.test_static[slot] | bits.test_dynamic[slot]) {
                     let at = 1u64 << bit;
                     fill.segments.push(Segment {
-                        origin,
                         node: slot as u16,
                         light: (word * 64 + bit) as u32,
                         test_static: bits.test_static[slot] & at != 0,
@@ -485,7 +482,6 @@ mod tests {
             prior_bits.dynamic_occluded[node] |= set(prior[3]);
             needed[node] |= bit;
             brick.segments.push(Segment {
-                origin: Vec3::ZERO,
                 node: node as u16,
                 light: light as u32,
                 test_static: flags[0],

@@ -87,6 +87,9 @@ contract! {
     DIRECTORY: u32 = 12;
     /// The surface pass's mesh words.
     MESH_WORDS: u32 = 12;
+    /// The fill's bricks: where their nodes lie and their slots start
+    /// (`fill.rs`'s `FillTable`).
+    FILL_BRICKS: u32 = 12;
     /// The mask pool's slots.
     POOL: u32 = 13;
     /// The surface pass's texture records.
@@ -179,6 +182,9 @@ contract! {
     // bits of its `light_flags`, the light's index above them.
     /// The bits of `light_flags` that hold the flags.
     FILL_FLAG_BITS: u32 = 4;
+    /// The bits of a fill segment's `brick_node` that hold the node's slot
+    /// in its brick, below the brick's index in the fill's table.
+    FILL_NODE_BITS: u32 = masks::BRICK_NODES.trailing_zeros();
     /// Trace the segment against the static structure.
     TEST_STATIC: u32 = 1;
     /// The node's static bit is known visible.

@@ -3,19 +3,22 @@
 //! pass (`fill_segments.wgsl`) against the static structure and the
 //! dynamic objects with the CPU's watertight test, so the bits are the
 //! CPU fill's. The CPU's shafts and remembered walls save it segments; a
-//! GPU traces them all side by side instead. What crosses is lean: 20
-//! bytes a segment up, four bits of answer down.
+//! GPU traces them all side by side instead. What crosses is lean: 8
+//! bytes a segment up (its brick, node, light and flags; the GPU places
+//! the node on the lattice as the CPU does), four bits of answer down.
 //!
 //! The pass writes each bit into the mask pool where it belongs, so the
 //! level's shading reads it without the CPU waiting for it; the answers
 //! come back with the CPU's next wait ([`FillAnswers`]), for its store.
 
 use bytemuck::{Pod, Zeroable};
+use glam::IVec3;
 
 use super::context::{GpuContext, GpuError};
 use super::contract::{
-    ANSWERS_PER_WORD, ANSWER_BITS, DYNAMIC_BLOCKED, DYNAMIC_TESTED, FILL_FLAG_BITS, ITEMS,
-    KNOWN_OCCLUDED, KNOWN_VISIBLE, LIGHTS, POOL, STATIC_BLOCKED, TEST_DYNAMIC, TEST_STATIC,
+    ANSWERS_PER_WORD, ANSWER_BITS, DYNAMIC_BLOCKED, DYNAMIC_TESTED, FILL_BRICKS, FILL_FLAG_BITS,
+    FILL_NODE_BITS, ITEMS, KNOWN_OCCLUDED, KNOWN_VISIBLE, LIGHTS, POOL, STATIC_BLOCKED,
+    TEST_DYNAMIC, TEST_STATIC,
 };
 use super::direct::FrameLights;
 use super::mask_pool::{MaskPool, SlotPlace};
@@ -23,34 +26,91 @@ use super::pass::{answer_buffer, Dispatch, WorldPass, WorldUse, BATCH};
 use super::recording::{Downloaded, Downloads, Part, Recording};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
+use crate::lightmesh::lattice::Lattice;
 use crate::lightmesh::segments::{Segment, SegmentAnswer, SegmentFill};
 
-/// `fill_segments.wgsl`'s `FillSegment`: 20 bytes, since a steady frame
+/// `fill_segments.wgsl`'s `FillSegment`: 8 bytes, since a steady frame
 /// of a fly-through sends a million of them.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct FillSegment {
-    origin: [f32; 3],
+    /// The brick's index in the [`FillTable`] above [`FILL_NODE_BITS`]
+    /// bits of the node's slot in it.
+    brick_node: u32,
     /// The light's index above [`FILL_FLAG_BITS`] bits of flags.
     light_flags: u32,
-    /// The pool's word of the node's lights that holds this light's bit.
-    pool_word: u32,
 }
 
 impl FillSegment {
-    /// `segment` of the brick whose slot is `slot`.
-    pub fn new(segment: &Segment, slot: SlotPlace) -> FillSegment {
+    /// `segment` of the fill's brick `brick`.
+    pub fn new(brick: usize, segment: &Segment) -> FillSegment {
         let flag = |on: bool, flag: u32| if on { flag } else { 0 };
         debug_assert!(segment.light < u32::MAX >> FILL_FLAG_BITS);
+        debug_assert!(brick < (u32::MAX >> FILL_NODE_BITS) as usize);
         FillSegment {
-            origin: segment.origin.to_array(),
+            brick_node: (brick as u32) << FILL_NODE_BITS | segment.node as u32,
             light_flags: segment.light << FILL_FLAG_BITS
                 | flag(segment.test_static, TEST_STATIC)
                 | flag(segment.known_visible, KNOWN_VISIBLE)
                 | flag(segment.test_dynamic, TEST_DYNAMIC)
                 | flag(segment.known_occluded, KNOWN_OCCLUDED),
-            pool_word: slot.light_word(segment.node, segment.light),
         }
+    }
+}
+
+/// `fill_segments.wgsl`'s `FillHeader`: the lattice, and the u32 light
+/// words of a node in the pool.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct FillHeader {
+    origin: [f32; 3],
+    h: f32,
+    light_words: u32,
+    _pad: [u32; 3],
+}
+
+/// `fill_segments.wgsl`'s `FillBrick`: a brick of the fill, and the pool
+/// word where its slot starts.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct FillBrick {
+    brick: [i32; 3],
+    slot_start: u32,
+}
+
+/// Where a fill's segments lie and write: the lattice and, per brick of
+/// the fill (in its order), its coordinates and its slot in the pool.
+pub struct FillTable {
+    header: FillHeader,
+    bricks: Vec<FillBrick>,
+}
+
+impl FillTable {
+    /// The table of `bricks` on `lattice`, each with its slot where it has
+    /// one (a brick without one has no segment to write).
+    pub fn new(lattice: &Lattice, bricks: &[IVec3], slots: &[Option<SlotPlace>]) -> FillTable {
+        let light_words = (slots.iter().flatten().next()).map_or(1, SlotPlace::light_words);
+        FillTable {
+            header: FillHeader {
+                origin: lattice.origin.to_array(),
+                h: lattice.h,
+                light_words: light_words as u32,
+                _pad: [0; 3],
+            },
+            bricks: (bricks.iter().zip(slots))
+                .map(|(brick, slot)| FillBrick {
+                    brick: brick.to_array(),
+                    slot_start: slot.map_or(u32::MAX, |slot| slot.start() as u32),
+                })
+                .collect(),
+        }
+    }
+
+    /// The header and the bricks, as the shader reads them.
+    fn bytes(&self) -> Vec<u8> {
+        let mut bytes = bytemuck::bytes_of(&self.header).to_vec();
+        bytes.extend_from_slice(bytemuck::cast_slice(&self.bricks));
+        bytes
     }
 }
 
@@ -72,15 +132,15 @@ impl FillPass {
                 context,
                 Entry::FillSegments,
                 WorldUse::Traces,
-                &[LIGHTS],
+                &[FILL_BRICKS, LIGHTS],
                 &[POOL],
             ),
         }
     }
 
     /// Records the tracing of `fill`'s segments against `scene` with
-    /// `lights`, each bit written into `pool`, where `slots` (one per
-    /// brick of the fill, in its order) place the bricks. Waits only
+    /// `lights`, each bit written into `pool`, where `table` places the
+    /// fill's bricks. Waits only
     /// between groups of [`BATCHES_PER_WAIT`] batches, where there are
     /// more; the answers left come back with the CPU's next wait.
     #[allow(clippy::too_many_arguments)]
@@ -90,14 +150,15 @@ impl FillPass {
         recording: &mut Recording,
         scene: &GpuScene,
         lights: &FrameLights,
-        (pool, slots): (&wgpu::Buffer, &[Option<SlotPlace>]),
+        (pool, table): (&wgpu::Buffer, &FillTable),
         fill: &SegmentFill,
     ) -> Result<FillAnswers, GpuError> {
-        let segments = fill.records(|brick, segment| {
-            let slot =
-                slots[brick].expect("admitting a level gives each brick with segments a slot");
-            FillSegment::new(segment, slot)
-        });
+        let segments = fill.records(FillSegment::new);
+        let table = context.checked(Entry::FillSegments.name(), || {
+            let bytes = table.bytes();
+            context.check_binding("fill bricks", bytes.len() as u64)?;
+            Ok::<_, GpuError>(context.upload("fill bricks", &bytes, wgpu::BufferUsages::STORAGE))
+        })?;
         context.traffic.traced(segments.len() as u64);
         let mut answers = FillAnswers {
             count: segments.len(),
@@ -111,7 +172,12 @@ impl FillPass {
                     let words = batch.len().div_ceil(ANSWERS_PER_WORD as usize);
                     let out = answer_buffer::<u32>(context, "fill answers", words)?;
                     let dispatch = Dispatch::new(scene, batch.len()).with_lights(lights.count());
-                    let reads = [(ITEMS, &items), (LIGHTS, lights.buffer()), (POOL, pool)];
+                    let reads = [
+                        (ITEMS, &items),
+                        (FILL_BRICKS, &table),
+                        (LIGHTS, lights.buffer()),
+                        (POOL, pool),
+                    ];
                     (self.pass).record(context, recording.encoder(), dispatch, &reads, &out);
                     answers.pending.push((out, words));
                 }
@@ -128,29 +194,32 @@ impl FillPass {
         Ok(answers)
     }
 
-    /// Traces `fill`'s segments on their own and waits for their answers,
-    /// one per segment in order (their bits go to a scratch pool of the
-    /// fill's bricks): the GPU's fill, for comparing with the CPU's.
+    /// Traces `fill`'s segments of `bricks` (the demand's, on `lattice`)
+    /// on their own and waits for their answers, one per segment in order
+    /// (their bits go to a scratch pool of the fill's bricks): the GPU's
+    /// fill, for comparing with the CPU's.
     pub fn trace(
         &self,
         context: &GpuContext,
         scene: &GpuScene,
         lights: &FrameLights,
+        (lattice, bricks): (&Lattice, &[IVec3]),
         fill: &SegmentFill,
     ) -> Result<Vec<SegmentAnswer>, GpuError> {
         let light_words = MaskPool::light_words(lights.count() as usize);
         let slot_words = MaskPool::slot_bytes(light_words) / size_of::<u32>();
-        let slots: Vec<Option<SlotPlace>> = (0..fill.bricks())
+        let slots: Vec<Option<SlotPlace>> = (0..bricks.len())
             .map(|brick| Some(SlotPlace::new(brick * slot_words, light_words)))
             .collect();
-        let scratch = answer_buffer::<u32>(context, "scratch pool", fill.bricks() * slot_words)?;
+        let table = FillTable::new(lattice, bricks, &slots);
+        let scratch = answer_buffer::<u32>(context, "scratch pool", bricks.len() * slot_words)?;
         let mut recording = Recording::new(context);
         let mut answers = self.record(
             context,
             &mut recording,
             scene,
             lights,
-            (&scratch, &slots),
+            (&scratch, &table),
             fill,
         )?;
         let mut downloads = Downloads::default();

@@ -29,7 +29,7 @@ use super::contract::{
     LIGHT_MESH_COUNTERS, LOOPS_CUT_SHORT, POOL, REACH,
 };
 use super::direct::FrameLights;
-use super::fill::{FillAnswers, FillPass};
+use super::fill::{FillAnswers, FillPass, FillTable};
 use super::layered::{LayeredPass, PointLayers};
 use super::mask_pool::MaskPool;
 use super::pass::{answer_buffer, Dispatch, WorldPass, WorldUse};
@@ -218,9 +218,9 @@ impl<'m> LightMeshShading<'m> {
         stats.add_stage_time("upload", start.elapsed().as_secs_f64());
 
         let start = Instant::now();
-        let slots = self.pool.places(&bricks);
+        let table = FillTable::new(&self.mesh.lattice, &bricks, &self.pool.places(&bricks));
         let (pool, _) = self.pool.buffers();
-        let answers = fill_pass.record(context, recording, scene, lights, (pool, &slots), &fill)?;
+        let answers = fill_pass.record(context, recording, scene, lights, (pool, &table), &fill)?;
         self.pending = Some(PendingFill {
             demand,
             fill,

@@ -155,10 +155,14 @@ impl SlotPlace {
         }
     }
 
-    /// The pool word of `node`'s pair ([`super::contract::VISIBLE`],
-    /// [`super::contract::VALID`]) for the u32 light word of `light`.
-    pub fn light_word(&self, node: u16, light: u32) -> u32 {
-        self.start + (node as u32 * self.light_words + light / 32) * GROUPS
+    /// The pool word where the slot starts.
+    pub fn start(&self) -> usize {
+        self.start as usize
+    }
+
+    /// The u32 light words of a node's group.
+    pub fn light_words(&self) -> usize {
+        self.light_words as usize
     }
 }
 

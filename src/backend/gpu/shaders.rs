@@ -173,6 +173,7 @@ const LIGHT_LAYERS: &str = include_str!("shaders/light_layers.wgsl");
 /// Omega, formula (1) at a point, and the light mesh's nodes.
 const OMEGA: &str = include_str!("shaders/omega.wgsl");
 const FORMULA_ONE: &str = include_str!("shaders/formula_one.wgsl");
+const LATTICE: &str = include_str!("shaders/lattice.wgsl");
 const LIGHT_MESH_NODES: &str = include_str!("shaders/light_mesh_nodes.wgsl");
 /// Which of a point's lamps are faint: their penumbrae keep the
 /// half-ball's answer.
@@ -185,31 +186,34 @@ const DIRECT_LIGHT: [&str; 6] = [
     FORMULA_ONE,
     include_str!("shaders/direct_light.wgsl"),
 ];
-const LIGHT_MESH_COVERAGE: [&str; 7] = [
+const LIGHT_MESH_COVERAGE: [&str; 8] = [
     VECTOR,
     SURFACE_POINT,
     SCHLICK,
     OMEGA,
+    LATTICE,
     LIGHT_MESH_NODES,
     FAINT,
     include_str!("shaders/light_mesh_coverage.wgsl"),
 ];
 /// The fill's segments, traced as formula (1)'s are.
-const FILL_SEGMENTS: [&str; 6] = [
+const FILL_SEGMENTS: [&str; 7] = [
     VECTOR,
     SURFACE_POINT,
     SCHLICK,
     OMEGA,
     FORMULA_ONE,
+    LATTICE,
     include_str!("shaders/fill_segments.wgsl"),
 ];
 /// Formula (2), which falls back to formula (1).
-const LIGHT_MESH: [&str; 7] = [
+const LIGHT_MESH: [&str; 8] = [
     VECTOR,
     SURFACE_POINT,
     SCHLICK,
     OMEGA,
     FORMULA_ONE,
+    LATTICE,
     LIGHT_MESH_NODES,
     include_str!("shaders/light_mesh.wgsl"),
 ];
@@ -376,7 +380,7 @@ mod tests {
         use crate::backend::gpu::aov_film::FirstHitRecord;
         use crate::backend::gpu::camera::CameraRecord;
         use crate::backend::gpu::direct::{DirectLight, FlatLight};
-        use crate::backend::gpu::fill::FillSegment;
+        use crate::backend::gpu::fill::{FillBrick, FillHeader, FillSegment};
         use crate::backend::gpu::film::EnvironmentRecord;
         use crate::backend::gpu::mask_pool::MeshHeader;
         use crate::backend::gpu::scene::Params;
@@ -461,7 +465,9 @@ mod tests {
                 size_of::<EnvironmentRecord>(),
                 vec![0, 12, 16, 28],
             ),
-            ("FillSegment", size_of::<FillSegment>(), vec![0, 12, 16]),
+            ("FillSegment", size_of::<FillSegment>(), vec![0, 4]),
+            ("FillHeader", size_of::<FillHeader>(), vec![0, 12, 16]),
+            ("FillBrick", size_of::<FillBrick>(), vec![0, 12]),
             (
                 "MeshHeader",
                 size_of::<MeshHeader>(),

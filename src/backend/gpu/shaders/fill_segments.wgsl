@@ -11,17 +11,36 @@
 // into `answers`, which the CPU merges into its store at its next wait.
 
 struct FillSegment {
-    origin: array<f32, 3>,
+    // The node's brick (its index in `table.bricks`) above FILL_NODE_BITS
+    // bits of its slot in the brick.
+    brick_node: u32,
     // The light's index above FILL_FLAG_BITS bits of TEST_STATIC |
     // KNOWN_VISIBLE | TEST_DYNAMIC | KNOWN_OCCLUDED (`contract.rs`); the
     // answer has STATIC_BLOCKED | DYNAMIC_TESTED | DYNAMIC_BLOCKED.
     light_flags: u32,
-    // The pool's word of the node's lights that holds this one's bit:
-    // VISIBLE and VALID are its pair of words.
-    pool_word: u32,
+}
+
+// The lattice, and the u32 light words of a node in the pool.
+struct FillHeader {
+    origin: vec3<f32>,
+    h: f32,
+    light_words: u32,
+}
+
+// A brick of the fill: its coordinates, and the pool's word where its
+// slot starts.
+struct FillBrick {
+    brick: array<i32, 3>,
+    slot_start: u32,
+}
+
+struct FillTable {
+    header: FillHeader,
+    bricks: array<FillBrick>,
 }
 
 @group(0) @binding(ITEMS) var<storage, read> segments: array<FillSegment>;
+@group(0) @binding(FILL_BRICKS) var<storage, read> table: FillTable;
 // ANSWERS_PER_WORD answers a word, each ANSWER_BITS bits.
 @group(0) @binding(ANSWERS) var<storage, read_write> answers: array<atomic<u32>>;
 // The mask pool's slots (`mask_pool.rs`). Each segment owns its bit, so
@@ -35,9 +54,13 @@ fn fill_segments(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let segment = segments[index];
-    let origin = vec3<f32>(segment.origin[0], segment.origin[1], segment.origin[2]);
+    let entry = table.bricks[segment.brick_node >> FILL_NODE_BITS];
+    let slot = segment.brick_node & ((1u << FILL_NODE_BITS) - 1u);
+    let brick = vec3<i32>(entry.brick[0], entry.brick[1], entry.brick[2]);
+    let origin = lattice_position(table.header.origin, table.header.h, brick_node(brick, slot));
+    let light_index = segment.light_flags >> FILL_FLAG_BITS;
     let flags = segment.light_flags & ((1u << FILL_FLAG_BITS) - 1u);
-    let light = lights[segment.light_flags >> FILL_FLAG_BITS];
+    let light = lights[light_index];
     let directional = light.directional != 0u;
     let direction = select(light.origin - origin, light.origin, directional);
     let t_max = select(SHADOW_SEGMENT_END, bitcast<f32>(0x7f800000u), directional);
@@ -58,12 +81,14 @@ fn fill_segments(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let shift = ANSWER_BITS * (index % ANSWERS_PER_WORD);
     atomicOr(&answers[index / ANSWERS_PER_WORD], answer << shift);
-    // `Segment::sees`: the bit as the CPU's store will fold it.
-    let bit = 1u << ((segment.light_flags >> FILL_FLAG_BITS) % 32u);
+    // `Segment::sees`: the bit as the CPU's store will fold it, in the
+    // node's pair of words for its light's word (`mask_pool.rs`).
+    let pair = entry.slot_start + (slot * table.header.light_words + light_index / 32u) * GROUPS;
+    let bit = 1u << (light_index % 32u);
     if open && !occluded {
-        atomicOr(&pool[segment.pool_word + VISIBLE], bit);
+        atomicOr(&pool[pair + VISIBLE], bit);
     } else {
-        atomicAnd(&pool[segment.pool_word + VISIBLE], ~bit);
+        atomicAnd(&pool[pair + VISIBLE], ~bit);
     }
-    atomicOr(&pool[segment.pool_word + VALID], bit);
+    atomicOr(&pool[pair + VALID], bit);
 }

@@ -134,12 +134,7 @@ fn node_position(node: vec3<i32>) -> vec3<f32> {
 
 // Where `node` of the lattice of step `h` lies.
 fn node_position_at(node: vec3<i32>, h: f32) -> vec3<f32> {
-    let origin = directory.header.origin;
-    return vec3<f32>(
-        origin.x + mul(h, f32(node.x)),
-        origin.y + mul(h, f32(node.y)),
-        origin.z + mul(h, f32(node.z)),
-    );
+    return lattice_position(directory.header.origin, h, node);
 }
 
 fn directory_hash(brick: vec3<i32>) -> u32 {
