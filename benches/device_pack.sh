@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Packs what a session lent a GPU machine runs (benches/device_check.sh):
+# the release lmanim, the GPU test binaries and the light-mesh bench,
+# stripped, with this machine's Vulkan loader (the lent images have had
+# none), into target/device.tar.xz: about 25 MB, where the device tool
+# carries at most 64 MiB. Run from the repository root on the build
+# machine, then carry target/device.tar.xz and run
+# `bash benches/device_check.sh` on the device.
+set -euo pipefail
+out=target/device
+rm -rf "$out" && mkdir -p "$out"
+cargo build --release --quiet
+cp target/release/lmanim "$out/"
+
+# The executable cargo built for `$@`, from its JSON messages.
+executable() {
+  cargo "$@" --no-run --quiet --message-format=json |
+    python3 -c 'import json, sys
+print([m["executable"] for m in map(json.loads, sys.stdin) if m.get("executable")][-1])'
+}
+for test in gpu_backend gpu_traffic reuse_property sequence_reuse; do
+  cp "$(executable test --release --test "$test")" "$out/$test"
+done
+cp "$(executable bench --bench lmm)" "$out/bench_lmm"
+strip "$out"/*
+cp -L /usr/lib/x86_64-linux-gnu/libvulkan.so.1 "$out/"
+tar -C target -cJf target/device.tar.xz device
+ls -l target/device.tar.xz
