@@ -23,6 +23,7 @@ use std::path::Path;
 use glam::IVec3;
 use glam::{Affine3A, DMat4, DQuat, DVec3, Quat, Vec2, Vec3};
 use lmanim::accel::{Hit, Ray, World, WorldObject};
+use lmanim::backend::gpu::fill::SEGMENTS_PER_WAIT;
 use lmanim::backend::gpu::mask_pool::MaskPool;
 use lmanim::backend::gpu::{FrameLights, GpuError};
 use lmanim::backend::{Backend, GpuBackend};
@@ -1246,9 +1247,25 @@ fn gpu_fill_bits_equal_the_cpu_fill() {
         let frame_lights = FrameLights::upload(passes.context, &lights).expect("lights");
         let bricks: Vec<IVec3> = demand.bricks.iter().map(|brick| brick.brick).collect();
         let place = (&on_gpu.lattice, &bricks[..]);
-        (passes.fill)
-            .trace(passes.context, passes.scene, &frame_lights, place, &fill)
-            .expect("GPU fill")
+        let trace = |per_wait| {
+            (passes.fill)
+                .trace(
+                    passes.context,
+                    passes.scene,
+                    &frame_lights,
+                    place,
+                    &fill,
+                    per_wait,
+                )
+                .expect("GPU fill")
+        };
+        let answers = trace(SEGMENTS_PER_WAIT);
+        // A fill too big for one wait (a cold frame's tens of millions of
+        // segments) is traced in groups, a wait after each but the last:
+        // the same answers, in the same order.
+        let per_wait = (fill.len() / 3).next_multiple_of(8);
+        assert_eq!(trace(per_wait), answers, "in groups of {per_wait}");
+        answers
     };
     let mut gpu_stats = LightMeshStats::default();
     on_gpu.merge_segments(&demand, &fill, &answers, &mut gpu_stats);

@@ -114,11 +114,11 @@ impl FillTable {
     }
 }
 
-/// The batches of segments recorded before the CPU waits for their
-/// answers where a level has more: a steady frame's million segments
-/// need no wait of their own, and a cold frame's tens of millions hold
-/// at most this many batches' buffers at once.
-const BATCHES_PER_WAIT: usize = 8;
+/// The segments recorded before the CPU waits for their answers where a
+/// level has more: eight batches, so a steady frame's million segments
+/// need no wait of their own, and a cold frame's tens of millions hold at
+/// most eight batches' buffers at once.
+pub const SEGMENTS_PER_WAIT: usize = 8 * BATCH;
 
 /// The fill's pipeline, made once per run.
 pub struct FillPass {
@@ -140,9 +140,10 @@ impl FillPass {
 
     /// Records the tracing of `fill`'s segments against `scene` with
     /// `lights`, each bit written into `pool`, where `table` places the
-    /// fill's bricks. Waits only
-    /// between groups of [`BATCHES_PER_WAIT`] batches, where there are
-    /// more; the answers left come back with the CPU's next wait.
+    /// fill's bricks. Waits only between groups of `per_wait` segments
+    /// ([`SEGMENTS_PER_WAIT`] but in tests; a whole number of answer
+    /// words), where there are more; the answers left come back with the
+    /// CPU's next wait.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -152,7 +153,10 @@ impl FillPass {
         lights: &FrameLights,
         (pool, table): (&wgpu::Buffer, &FillTable),
         fill: &SegmentFill,
+        per_wait: usize,
     ) -> Result<FillAnswers, GpuError> {
+        // Each group's answers then start a word of their own.
+        assert!(per_wait > 0 && per_wait.is_multiple_of(ANSWERS_PER_WORD as usize));
         let segments = fill.records(FillSegment::new);
         let table = context.checked(Entry::FillSegments.name(), || {
             let bytes = table.bytes();
@@ -164,8 +168,8 @@ impl FillPass {
             count: segments.len(),
             ..FillAnswers::default()
         };
-        let groups = segments.chunks(BATCH * BATCHES_PER_WAIT).count();
-        for (index, group) in segments.chunks(BATCH * BATCHES_PER_WAIT).enumerate() {
+        let groups = segments.chunks(per_wait).count();
+        for (index, group) in segments.chunks(per_wait).enumerate() {
             context.checked(Entry::FillSegments.name(), || {
                 for batch in group.chunks(BATCH) {
                     let items = storage(context, "fill segments", batch)?;
@@ -197,7 +201,8 @@ impl FillPass {
     /// Traces `fill`'s segments of `bricks` (the demand's, on `lattice`)
     /// on their own and waits for their answers, one per segment in order
     /// (their bits go to a scratch pool of the fill's bricks): the GPU's
-    /// fill, for comparing with the CPU's.
+    /// fill, for comparing with the CPU's, waiting every `per_wait`
+    /// segments as [`FillPass::record`] does.
     pub fn trace(
         &self,
         context: &GpuContext,
@@ -205,6 +210,7 @@ impl FillPass {
         lights: &FrameLights,
         (lattice, bricks): (&Lattice, &[IVec3]),
         fill: &SegmentFill,
+        per_wait: usize,
     ) -> Result<Vec<SegmentAnswer>, GpuError> {
         let light_words = MaskPool::light_words(lights.count() as usize);
         let slot_words = MaskPool::slot_bytes(light_words) / size_of::<u32>();
@@ -221,6 +227,7 @@ impl FillPass {
             lights,
             (&scratch, &table),
             fill,
+            per_wait,
         )?;
         let mut downloads = Downloads::default();
         let parts = answers.download(&mut downloads);

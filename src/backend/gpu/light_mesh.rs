@@ -29,7 +29,7 @@ use super::contract::{
     LIGHT_MESH_COUNTERS, LOOPS_CUT_SHORT, POOL, REACH,
 };
 use super::direct::FrameLights;
-use super::fill::{FillAnswers, FillPass, FillTable};
+use super::fill::{FillAnswers, FillPass, FillTable, SEGMENTS_PER_WAIT};
 use super::layered::{LayeredPass, PointLayers};
 use super::mask_pool::MaskPool;
 use super::pass::{answer_buffer, Dispatch, WorldPass, WorldUse};
@@ -220,7 +220,16 @@ impl<'m> LightMeshShading<'m> {
         let start = Instant::now();
         let table = FillTable::new(&self.mesh.lattice, &bricks, &self.pool.places(&bricks));
         let (pool, _) = self.pool.buffers();
-        let answers = fill_pass.record(context, recording, scene, lights, (pool, &table), &fill)?;
+        let targets = (pool, &table);
+        let answers = fill_pass.record(
+            context,
+            recording,
+            scene,
+            lights,
+            targets,
+            &fill,
+            SEGMENTS_PER_WAIT,
+        )?;
         self.pending = Some(PendingFill {
             demand,
             fill,
