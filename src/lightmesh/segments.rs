@@ -132,11 +132,6 @@ impl SegmentFill {
             .collect()
     }
 
-    /// How many bricks the fill has segments or shafts for: the demand's.
-    pub fn bricks(&self) -> usize {
-        self.bricks.len()
-    }
-
     /// How many segments there are.
     pub fn len(&self) -> usize {
         self.bricks.iter().map(|brick| brick.segments.len()).sum()

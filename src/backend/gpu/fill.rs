@@ -21,7 +21,7 @@ use super::contract::{
     TEST_DYNAMIC, TEST_STATIC,
 };
 use super::direct::FrameLights;
-use super::mask_pool::{MaskPool, SlotPlace};
+use super::mask_pool::MaskPool;
 use super::pass::{answer_buffer, Dispatch, WorldPass, WorldUse, BATCH};
 use super::recording::{Downloaded, Downloads, Part, Recording};
 use super::scene::{storage, GpuScene};
@@ -86,10 +86,16 @@ pub struct FillTable {
 }
 
 impl FillTable {
-    /// The table of `bricks` on `lattice`, each with its slot where it has
-    /// one (a brick without one has no segment to write).
-    pub fn new(lattice: &Lattice, bricks: &[IVec3], slots: &[Option<SlotPlace>]) -> FillTable {
-        let light_words = (slots.iter().flatten().next()).map_or(1, SlotPlace::light_words);
+    /// The table of `bricks` on `lattice`, each with the pool word where
+    /// its slot starts where it has one (a brick without one has no
+    /// segment to write), in a pool of `light_words` u32 light words per
+    /// node.
+    pub fn new(
+        lattice: &Lattice,
+        light_words: usize,
+        bricks: &[IVec3],
+        slot_starts: &[Option<usize>],
+    ) -> FillTable {
         FillTable {
             header: FillHeader {
                 origin: lattice.origin.to_array(),
@@ -97,10 +103,10 @@ impl FillTable {
                 light_words: light_words as u32,
                 _pad: [0; 3],
             },
-            bricks: (bricks.iter().zip(slots))
-                .map(|(brick, slot)| FillBrick {
+            bricks: (bricks.iter().zip(slot_starts))
+                .map(|(brick, start)| FillBrick {
                     brick: brick.to_array(),
-                    slot_start: slot.map_or(u32::MAX, |slot| slot.start() as u32),
+                    slot_start: start.map_or(u32::MAX, |start| start as u32),
                 })
                 .collect(),
         }
@@ -214,10 +220,10 @@ impl FillPass {
     ) -> Result<Vec<SegmentAnswer>, GpuError> {
         let light_words = MaskPool::light_words(lights.count() as usize);
         let slot_words = MaskPool::slot_bytes(light_words) / size_of::<u32>();
-        let slots: Vec<Option<SlotPlace>> = (0..bricks.len())
-            .map(|brick| Some(SlotPlace::new(brick * slot_words, light_words)))
+        let starts: Vec<Option<usize>> = (0..bricks.len())
+            .map(|brick| Some(brick * slot_words))
             .collect();
-        let table = FillTable::new(lattice, bricks, &slots);
+        let table = FillTable::new(lattice, light_words, bricks, &starts);
         let scratch = answer_buffer::<u32>(context, "scratch pool", bricks.len() * slot_words)?;
         let mut recording = Recording::new(context);
         let mut answers = self.record(

@@ -218,7 +218,9 @@ impl<'m> LightMeshShading<'m> {
         stats.add_stage_time("upload", start.elapsed().as_secs_f64());
 
         let start = Instant::now();
-        let table = FillTable::new(&self.mesh.lattice, &bricks, &self.pool.places(&bricks));
+        let light_words = MaskPool::light_words(self.mesh.masks().lights());
+        let starts = self.pool.slot_starts(&bricks);
+        let table = FillTable::new(&self.mesh.lattice, light_words, &bricks, &starts);
         let (pool, _) = self.pool.buffers();
         let targets = (pool, &table);
         let answers = fill_pass.record(

@@ -137,35 +137,6 @@ pub struct MaskPool {
 /// gather brings them back after a second wait.
 const GATHER_MARGIN: usize = 1024;
 
-/// Where a resident brick's words lie in the pool, for a pass that
-/// writes its bits in place (the GPU's fill).
-#[derive(Clone, Copy, Debug)]
-pub struct SlotPlace {
-    start: u32,
-    light_words: u32,
-}
-
-impl SlotPlace {
-    /// A slot whose first word is `start`, with `light_words` u32 light
-    /// words per node.
-    pub fn new(start: usize, light_words: usize) -> SlotPlace {
-        SlotPlace {
-            start: start as u32,
-            light_words: light_words as u32,
-        }
-    }
-
-    /// The pool word where the slot starts.
-    pub fn start(&self) -> usize {
-        self.start as usize
-    }
-
-    /// The u32 light words of a node's group.
-    pub fn light_words(&self) -> usize {
-        self.light_words as usize
-    }
-}
-
 /// What one update uploaded, for the stats.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PoolUpload {
@@ -349,16 +320,12 @@ impl MaskPool {
         !changed.is_empty()
     }
 
-    /// Where `bricks`' slots are, for a pass that writes their bits in
-    /// place; None for a brick that has none.
-    pub fn places(&self, bricks: &[IVec3]) -> Vec<Option<SlotPlace>> {
+    /// The pool word where each of `bricks`' slots starts, for a pass
+    /// that writes their bits in place; None for a brick that has none.
+    pub fn slot_starts(&self, bricks: &[IVec3]) -> Vec<Option<usize>> {
         let slot_words = self.slot_words();
         (bricks.iter())
-            .map(|brick| {
-                let resident = self.resident.get(brick)?;
-                let start = resident.slot as usize * slot_words;
-                Some(SlotPlace::new(start, self.light_words))
-            })
+            .map(|brick| Some(self.resident.get(brick)?.slot as usize * slot_words))
             .collect()
     }
 
