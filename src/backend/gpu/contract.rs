@@ -233,6 +233,10 @@ contract! {
     // GROUPS words side by side, so that the fill writes one pair.
     /// Nodes of a brick.
     BRICK_NODES: u32 = masks::BRICK_NODES as u32;
+    /// Nodes along a brick's edge (`masks::split`, `masks::join`), and
+    /// its power of two.
+    BRICK_EDGE: u32 = masks::BRICK_EDGE as u32;
+    BRICK_SHIFT: u32 = BRICK_EDGE.trailing_zeros();
     /// Words per node and light word.
     GROUPS: u32 = 2;
     /// The word of the lights a node sees.

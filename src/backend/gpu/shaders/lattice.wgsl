@@ -11,6 +11,10 @@ fn lattice_position(origin: vec3<f32>, h: f32, node: vec3<i32>) -> vec3<f32> {
 
 // The node in `slot` (`masks::join`) of `brick`.
 fn brick_node(brick: vec3<i32>, slot: u32) -> vec3<i32> {
-    let local = vec3<u32>(slot % 8u, slot / 8u % 8u, slot / 64u);
-    return brick * 8 + vec3<i32>(local);
+    let local = vec3<u32>(
+        slot % BRICK_EDGE,
+        slot / BRICK_EDGE % BRICK_EDGE,
+        slot / (BRICK_EDGE * BRICK_EDGE),
+    );
+    return brick * i32(BRICK_EDGE) + vec3<i32>(local);
 }

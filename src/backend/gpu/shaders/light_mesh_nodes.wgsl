@@ -179,7 +179,7 @@ var<private> cached_brick: vec3<i32>;
 var<private> cached_slot: i32 = -2;
 
 fn node_mask(node: vec3<i32>) -> NodeMask {
-    let brick = node >> vec3<u32>(3u);
+    let brick = node >> vec3<u32>(BRICK_SHIFT);
     if cached_slot == -2 || any(brick != cached_brick) {
         cached_brick = brick;
         cached_slot = brick_slot(brick);
@@ -187,8 +187,8 @@ fn node_mask(node: vec3<i32>) -> NodeMask {
     if cached_slot < 0 {
         return NodeMask(false, 0u, false, false);
     }
-    let local = vec3<u32>(node & vec3<i32>(7));
-    let in_brick = (local.z * 8u + local.y) * 8u + local.x;
+    let local = vec3<u32>(node & vec3<i32>(i32(BRICK_EDGE) - 1));
+    let in_brick = (local.z * BRICK_EDGE + local.y) * BRICK_EDGE + local.x;
     let slot_base = u32(cached_slot) * slot_size();
     let words = directory.header.light_words;
     let known = slot_base + BRICK_NODES * GROUPS * words + in_brick / 32u;
