@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # What a session lent a real GPU runs for issues 33 and 34, in one call
-# (about 6 minutes on an H100), from target/device.tar.xz
+# (about 8 minutes on an H100), from target/device.tar.xz
 # (benches/device_pack.sh): the GPU tests, which must give the CPU's bits
 # there too; the city fly-through at 1280x720, LMM1 against Whitted, with
 # `--stats` (waits, bytes, stages per frame; issue 33's steady frame under
 # 30 ms); and the 64-lamp bench at 1080p on the GPU backend (cold and
-# flythrough frames, Whitted against LMM1). Everything it prints and the
-# stats files land in $OUT (the device tool's folder) or /tmp/device-check.
+# flythrough frames, Whitted against LMM1), twice: with the fill's shafts
+# and without (whether a GPU is better off tracing every segment).
+# Everything it prints and the stats files land in $OUT (the device
+# tool's folder) or /tmp/device-check.
 # WIDTH, HEIGHT, FRAMES and BENCH_HEIGHT (0 skips the bench) make it a
 # smaller run, to try the script on lavapipe first.
 #
@@ -61,7 +63,9 @@ done
 rm -f "$out"/city-*.exr
 
 if [ "$bench_height" != 0 ]; then
-  echo "== 64 lamps, ${bench_height}p, GPU backend"
-  LMANIM_BENCH_BACKEND=gpu LMANIM_BENCH_LAMPS=64 LMANIM_BENCH_HEIGHT=$bench_height \
-    timeout 300 "$bin/bench_lmm" --bench
+  for shafts in test skip; do
+    echo "== 64 lamps, ${bench_height}p, GPU backend, the fill's shafts: $shafts"
+    LMANIM_BENCH_BACKEND=gpu LMANIM_BENCH_LAMPS=64 LMANIM_BENCH_HEIGHT=$bench_height \
+      LMANIM_BENCH_SHAFTS=$shafts timeout 300 "$bin/bench_lmm" --bench
+  done
 fi

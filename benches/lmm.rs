@@ -21,7 +21,9 @@
 //! advantage (issue 34's cold-frame figure), which the full run leaves
 //! out for its time. `LMANIM_BENCH_BACKEND=gpu`
 //! runs the matrix on the GPU backend (the adapter is printed: a software
-//! one's timings say nothing of a GPU's). `LMANIM_BENCH_SCENES=DIR` keeps
+//! one's timings say nothing of a GPU's); with it, `LMANIM_BENCH_SHAFTS=skip`
+//! makes the fill trace every missing bit instead of settling groups by
+//! shafts first (same bits; `lightmesh::segments`). `LMANIM_BENCH_SCENES=DIR` keeps
 //! the generated cities in DIR, for timing one frame with `lmanim` itself
 //! (`perf stat` counts its CPU time, which a busy machine disturbs less
 //! than the wall clock).
@@ -31,6 +33,7 @@ use std::time::Instant;
 
 use lmanim::backend::Backend;
 use lmanim::lightmesh::penumbra::Penumbra;
+use lmanim::lightmesh::segments::Shafts;
 use lmanim::sequence::Sequence;
 use lmanim::settings::{Method, Settings};
 use lmanim::stats::FrameStats;
@@ -59,6 +62,11 @@ fn main() {
         Ok(other) => panic!("LMANIM_BENCH_BACKEND is cpu or gpu, not {other}"),
     };
     let mut backend = lmanim::backend::Backend::new(kind, None).expect("backend");
+    match std::env::var("LMANIM_BENCH_SHAFTS").as_deref() {
+        Ok("test") | Err(_) => {}
+        Ok("skip") => backend.set_fill_shafts(Shafts::Skip),
+        Ok(other) => panic!("LMANIM_BENCH_SHAFTS is test or skip, not {other}"),
+    }
     println!("threads: {}", backend.threads());
     if let Some(adapter) = backend.adapter() {
         println!("adapter: {adapter}");

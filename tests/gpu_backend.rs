@@ -30,6 +30,7 @@ use lmanim::backend::{Backend, GpuBackend};
 use lmanim::lightmesh::demand::{BrickDemand, Demand};
 use lmanim::lightmesh::lattice::Lattice;
 use lmanim::lightmesh::masks::BRICK_NODES;
+use lmanim::lightmesh::segments::Shafts;
 use lmanim::lightmesh::{LightMesh, LightMeshStats};
 use lmanim::output::{read_exr, Image};
 use lmanim::render::frame::FrameScene;
@@ -1053,6 +1054,37 @@ fn the_mask_pool_holds_the_stores_bricks_after_every_frame() {
     }
 }
 
+/// A fill without shafts makes a segment for every missing bit: the
+/// courtyard's frames (the ball rolling, masks reused) come out the same
+/// bits as with them, with no shaft tested and more segments traced.
+#[test]
+fn a_fill_without_shafts_renders_the_same_frames() {
+    let times = [0.0, 1.0 / 24.0, 2.0 / 24.0];
+    let mut frames = Vec::new();
+    for shafts in [Shafts::Test, Shafts::Skip] {
+        let Some(gpu) = gpu() else { return };
+        let mut backend = Backend::Gpu(Box::new(gpu));
+        backend.set_fill_shafts(shafts);
+        let limit = 256 << 20;
+        frames.push(courtyard_frames_with_mask_pool(&mut backend, limit, &times).expect("frames"));
+    }
+    let (with, without) = (&frames[0], &frames[1]);
+    for (frame, ((image, stats), (image_without, stats_without))) in
+        with.iter().zip(without).enumerate()
+    {
+        assert!(image == image_without, "frame {frame} differs");
+        assert_eq!(stats_without.fill_shafts, 0, "frame {frame}");
+        assert_eq!(
+            stats_without.bits_computed, stats.bits_computed,
+            "frame {frame}"
+        );
+        if frame == 0 {
+            assert!(stats.fill_shafts > 0, "{stats:?}");
+            assert!(stats_without.fill_segments > stats.fill_segments);
+        }
+    }
+}
+
 /// A mask pool smaller than the frame's bricks evicts bricks no level
 /// reads and gives the unbounded pool's image; one smaller than a single
 /// level's bricks refuses the frame, naming h and the setting to raise.
@@ -1227,7 +1259,7 @@ fn gpu_fill_bits_equal_the_cpu_fill() {
         words,
     };
     let mut on_cpu = LightMesh::new(Lattice::new(0.2), 2.5, lights.len(), 1 << 30);
-    let mut on_gpu = on_cpu.clone();
+    let before_fill = on_cpu.clone();
     let mut cpu_stats = LightMeshStats::default();
     on_cpu
         .fill(&demand, &lights, &world, &mut cpu_stats)
@@ -1239,66 +1271,80 @@ fn gpu_fill_bits_equal_the_cpu_fill() {
         "the CPU fill took every shortcut: {cpu_stats:?}"
     );
 
-    let fill = on_gpu
-        .fill_segments(&demand, &lights, &world)
-        .expect("segments");
-    let answers = {
-        let passes = gpu.passes_for(&world).expect("upload");
-        let frame_lights = FrameLights::upload(passes.context, &lights).expect("lights");
-        let bricks: Vec<IVec3> = demand.bricks.iter().map(|brick| brick.brick).collect();
-        let place = (&on_gpu.lattice, &bricks[..]);
-        let trace = |per_wait| {
-            (passes.fill)
-                .trace(
-                    passes.context,
-                    passes.scene,
-                    &frame_lights,
-                    place,
-                    &fill,
-                    per_wait,
-                )
-                .expect("GPU fill")
+    // The fill with shafts (the CPU's, a software adapter's) and without
+    // (a GPU's): the same bits.
+    let mut segments_with_shafts = 0;
+    for shafts in [Shafts::Test, Shafts::Skip] {
+        let mut on_gpu = before_fill.clone();
+        let fill = on_gpu
+            .fill_segments(&demand, &lights, &world, shafts)
+            .expect("segments");
+        let answers = {
+            let passes = gpu.passes_for(&world).expect("upload");
+            let frame_lights = FrameLights::upload(passes.context, &lights).expect("lights");
+            let bricks: Vec<IVec3> = demand.bricks.iter().map(|brick| brick.brick).collect();
+            let place = (&on_gpu.lattice, &bricks[..]);
+            let trace = |per_wait| {
+                (passes.fill)
+                    .trace(
+                        passes.context,
+                        passes.scene,
+                        &frame_lights,
+                        place,
+                        &fill,
+                        per_wait,
+                    )
+                    .expect("GPU fill")
+            };
+            let answers = trace(SEGMENTS_PER_WAIT);
+            // A fill too big for one wait (a cold frame's tens of millions of
+            // segments) is traced in groups, a wait after each but the last:
+            // the same answers, in the same order.
+            let per_wait = (fill.len() / 3).next_multiple_of(8);
+            assert_eq!(trace(per_wait), answers, "in groups of {per_wait}");
+            answers
         };
-        let answers = trace(SEGMENTS_PER_WAIT);
-        // A fill too big for one wait (a cold frame's tens of millions of
-        // segments) is traced in groups, a wait after each but the last:
-        // the same answers, in the same order.
-        let per_wait = (fill.len() / 3).next_multiple_of(8);
-        assert_eq!(trace(per_wait), answers, "in groups of {per_wait}");
-        answers
-    };
-    let mut gpu_stats = LightMeshStats::default();
-    on_gpu.merge_segments(&demand, &fill, &answers, &mut gpu_stats);
-    assert_eq!(gpu_stats.bits_computed, cpu_stats.bits_computed);
-    assert!(gpu_stats.fill_shafts > 0 && gpu_stats.fill_segments > 0);
-
-    let mut differing = 0usize;
-    let mut dynamic_blocked = 0usize;
-    for brick in &demand.bricks {
-        let (cpu, gpu) = (
-            on_cpu.masks().brick(brick.brick),
-            on_gpu.masks().brick(brick.brick),
-        );
-        let (Some(cpu), Some(gpu)) = (cpu, gpu) else {
-            panic!("brick {} was not filled", brick.brick);
-        };
-        differing += cpu
-            .iter()
-            .zip(gpu)
-            .map(|(a, b)| (a ^ b).count_ones() as usize)
-            .sum::<usize>();
-        for slot in 0..BRICK_NODES {
-            let mask = on_cpu.masks().slot_mask(cpu, slot);
-            dynamic_blocked += (0..words)
-                .map(|word| mask.dynamic_layer(word).0.count_ones() as usize)
-                .sum::<usize>();
+        let mut gpu_stats = LightMeshStats::default();
+        on_gpu.merge_segments(&demand, &fill, &answers, &mut gpu_stats);
+        assert_eq!(gpu_stats.bits_computed, cpu_stats.bits_computed);
+        match shafts {
+            Shafts::Test => assert!(gpu_stats.fill_shafts > 0 && gpu_stats.fill_segments > 0),
+            // A fill for a GPU traces every bit the shafts settled too.
+            Shafts::Skip => assert!(
+                gpu_stats.fill_shafts == 0 && gpu_stats.fill_segments > segments_with_shafts,
+                "{gpu_stats:?}"
+            ),
         }
-    }
-    assert!(dynamic_blocked > 0, "the dynamic box blocks some node");
-    if exact {
-        assert_eq!(differing, 0, "bits differ between the fills");
-    } else {
-        assert!(differing * 1000 < answers.len(), "{differing} bits differ");
+        segments_with_shafts = gpu_stats.fill_segments;
+
+        let mut differing = 0usize;
+        let mut dynamic_blocked = 0usize;
+        for brick in &demand.bricks {
+            let (cpu, gpu) = (
+                on_cpu.masks().brick(brick.brick),
+                on_gpu.masks().brick(brick.brick),
+            );
+            let (Some(cpu), Some(gpu)) = (cpu, gpu) else {
+                panic!("brick {} was not filled", brick.brick);
+            };
+            differing += cpu
+                .iter()
+                .zip(gpu)
+                .map(|(a, b)| (a ^ b).count_ones() as usize)
+                .sum::<usize>();
+            for slot in 0..BRICK_NODES {
+                let mask = on_cpu.masks().slot_mask(cpu, slot);
+                dynamic_blocked += (0..words)
+                    .map(|word| mask.dynamic_layer(word).0.count_ones() as usize)
+                    .sum::<usize>();
+            }
+        }
+        assert!(dynamic_blocked > 0, "the dynamic box blocks some node");
+        if exact {
+            assert_eq!(differing, 0, "bits differ between the fills");
+        } else {
+            assert!(differing * 1000 < answers.len(), "{differing} bits differ");
+        }
     }
 }
 

@@ -18,6 +18,7 @@ use std::path::Path;
 pub use cpu::CpuBackend;
 pub use gpu::{GpuBackend, GpuError};
 
+use crate::lightmesh::segments::Shafts;
 use crate::lightmesh::{LightMesh, LightMeshError};
 use crate::output::RenderedFrame;
 use crate::plan::Shadows;
@@ -92,6 +93,15 @@ impl Backend {
     pub fn limit_mask_memory(&mut self, bytes: usize) {
         if let Backend::Gpu(gpu) = self {
             gpu.limit_mask_memory(bytes);
+        }
+    }
+
+    /// Sets whether the GPU's light-mesh fill groups its segments by
+    /// shafts first (it does unless told; the CPU backend's fill always
+    /// does): for measuring both on one adapter.
+    pub fn set_fill_shafts(&mut self, shafts: Shafts) {
+        if let Backend::Gpu(gpu) = self {
+            gpu.set_fill_shafts(shafts);
         }
     }
 

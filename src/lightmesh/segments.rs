@@ -12,6 +12,15 @@
 //! structure where the static bit is missing, then, where the node is
 //! open (its static bit known visible, or just found so) and the dynamic
 //! bit is missing, the dynamic objects.
+//!
+//! Shafts cost the CPU time while they save the tracer segments
+//! ([`Shafts`] turns them off; the bits are the same either way). On
+//! lavapipe, whose tracing is the CPU's own cores, they pay: the city
+//! fly-through's steady frames without them spend about 40% less in the
+//! CPU's fill stage but trace a third to a half more segments and render
+//! 14–39% slower (BENCHMARKS.md). Whether a real GPU, whose tracing does
+//! not take the CPU's cores, is faster without them has not been
+//! measured; `benches/device_check.sh` measures it.
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -24,6 +33,16 @@ use crate::accel::shaft::Shaft;
 use crate::accel::World;
 use crate::bits::{holders_by_bit, set_bits};
 use crate::render::light::RenderLight;
+
+/// Whether [`LightMesh::fill_segments`] settles groups of a light's nodes
+/// by shafts before making their segments.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shafts {
+    /// Test a shaft per light and brick; a clear one settles its nodes.
+    Test,
+    /// Make a segment for every missing bit.
+    Skip,
+}
 
 /// One node-to-light segment of the fill.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -151,19 +170,20 @@ struct WordBits {
 }
 
 impl LightMesh {
-    /// The fill of `demand`'s missing bits: groups settled by shafts, and
-    /// a segment for each bit left, in brick, node and light order.
-    /// Refuses (before allocating) when the masks would outgrow the memory
-    /// limit.
+    /// The fill of `demand`'s missing bits: groups settled by shafts
+    /// where `shafts` says so, and a segment for each bit left, in brick,
+    /// node and light order. Refuses (before allocating) when the masks
+    /// would outgrow the memory limit.
     pub fn fill_segments(
         &self,
         demand: &Demand,
         lights: &[RenderLight],
         world: &World,
+        shafts: Shafts,
     ) -> Result<SegmentFill, LightMeshError> {
         self.check_memory(demand, lights.len())?;
         let bricks: Vec<BrickFill> = (demand.bricks.par_iter())
-            .map(|brick| self.brick_segments(brick, demand.words, lights, world))
+            .map(|brick| self.brick_segments(brick, demand.words, (lights, world), shafts))
             .collect();
         let shafts = bricks.iter().map(|brick| brick.shafts).sum();
         Ok(SegmentFill { bricks, shafts })
@@ -173,13 +193,17 @@ impl LightMesh {
         &self,
         brick: &BrickDemand,
         words: usize,
-        lights: &[RenderLight],
-        world: &World,
+        (lights, world): (&[RenderLight], &World),
+        shafts: Shafts,
     ) -> BrickFill {
         let stored = self.masks.brick(brick.brick);
-        let positions: Vec<Vec3> = (0..BRICK_NODES)
-            .map(|slot| self.lattice.node_position(join(brick.brick, slot)))
-            .collect();
+        // Only shafts place the nodes.
+        let positions: Vec<Vec3> = match shafts {
+            Shafts::Test => (0..BRICK_NODES)
+                .map(|slot| self.lattice.node_position(join(brick.brick, slot)))
+                .collect(),
+            Shafts::Skip => Vec::new(),
+        };
         let mut fill = BrickFill::default();
         for word in 0..words {
             let mut bits = WordBits {
@@ -209,7 +233,11 @@ impl LightMesh {
             // Static shafts first: a clear one leaves its nodes open.
             // A clear shaft clears only its own light's bits, so the
             // groups made before it stand.
-            for (bit, members) in holders_by_bit(&bits.test_static) {
+            let static_groups = match shafts {
+                Shafts::Test => holders_by_bit(&bits.test_static),
+                Shafts::Skip => Vec::new(),
+            };
+            for (bit, members) in static_groups {
                 if fill.shaft_is_clear(&members, &positions, light(bit), |shaft| {
                     world.shaft_is_clear_static(shaft)
                 }) {
@@ -220,10 +248,15 @@ impl LightMesh {
                     }
                 }
             }
-            // Dynamic shafts over the nodes known open.
-            let open_dynamic: Vec<u64> = (0..BRICK_NODES)
-                .map(|slot| bits.test_dynamic[slot] & bits.known_visible[slot])
-                .collect();
+            // Dynamic shafts over the nodes known open; with no dynamic
+            // object at all, every open node's dynamic bit is clear
+            // without one.
+            let open_dynamic: Vec<u64> = match (world.has_dynamic(), shafts) {
+                (true, Shafts::Skip) => Vec::new(),
+                _ => (0..BRICK_NODES)
+                    .map(|slot| bits.test_dynamic[slot] & bits.known_visible[slot])
+                    .collect(),
+            };
             for (bit, members) in holders_by_bit(&open_dynamic) {
                 let clear = !world.has_dynamic()
                     || fill.shaft_is_clear(&members, &positions, light(bit), |shaft| {

@@ -40,7 +40,7 @@ use super::surface::{LevelBuffers, SurfacePoint};
 use crate::backend::RenderError;
 use crate::lightmesh::demand::Demand;
 use crate::lightmesh::interpolate::PointCounts;
-use crate::lightmesh::segments::SegmentFill;
+use crate::lightmesh::segments::{SegmentFill, Shafts};
 use crate::lightmesh::{LightMesh, LightMeshStats};
 use crate::render::omega::LightLanes;
 use crate::render::shadow_split::{FrameMethod, LightRole};
@@ -98,6 +98,8 @@ pub struct LightMeshShading<'m> {
     mesh: &'m mut LightMesh,
     pool: &'m mut MaskPool,
     point_to_node_tests: bool,
+    /// Whether the fill's segments are first grouped by shafts.
+    shafts: Shafts,
     /// The frame's lights with only those the light mesh shades powered:
     /// the demand asks for their bits alone.
     lanes: LightLanes,
@@ -139,7 +141,7 @@ impl<'m> LightMeshShading<'m> {
         context: &GpuContext,
         mesh: &'m mut LightMesh,
         pool: &'m mut MaskPool,
-        method: FrameMethod,
+        (method, shafts): (FrameMethod, Shafts),
         job: &FrameJob,
     ) -> Result<LightMeshShading<'m>, RenderError> {
         let lights = &job.frame.lights;
@@ -147,6 +149,7 @@ impl<'m> LightMeshShading<'m> {
             mesh,
             pool,
             point_to_node_tests: method.tests_point_to_node(),
+            shafts,
             lanes: (job.shadows).lanes(method, lights, |role| role == LightRole::LightMesh),
             work: LightMeshStats::default(),
             counts: answer_buffer::<Counters>(context, "light-mesh counters", 1)?,
@@ -196,7 +199,7 @@ impl<'m> LightMeshShading<'m> {
         stats.add_stage_time("demand", start.elapsed().as_secs_f64());
 
         let start = Instant::now();
-        let fill = (self.mesh).fill_segments(&demand, &job.frame.lights, job.world)?;
+        let fill = (self.mesh).fill_segments(&demand, &job.frame.lights, job.world, self.shafts)?;
         self.mesh.settle_shafts(&demand, &fill);
         stats.add_stage_time("fill", start.elapsed().as_secs_f64());
 

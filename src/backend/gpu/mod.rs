@@ -58,6 +58,7 @@ use super::aov::{AovFrame, LightLayers};
 use super::band::bands;
 use super::{thread_pool, BackendError, RenderError};
 use crate::accel::{Ray, World};
+use crate::lightmesh::segments::Shafts;
 use crate::lightmesh::LightMesh;
 use crate::output::{Image, RenderedFrame};
 use crate::render::scatter::most_secondary_rays;
@@ -92,6 +93,9 @@ pub struct GpuBackend {
     mask_pool: Option<MaskPool>,
     /// Bytes the mask pool may take.
     mask_memory: usize,
+    /// Whether the light mesh's fill groups its segments by shafts first
+    /// (`lightmesh::segments`; [`Shafts::Test`] unless set).
+    fill_shafts: Shafts,
 }
 
 impl GpuBackend {
@@ -108,6 +112,7 @@ impl GpuBackend {
             frame_surfaces: None,
             mask_pool: None,
             mask_memory: LightMeshSettings::default().gpu_memory_mib << 20,
+            fill_shafts: Shafts::Test,
         })
     }
 
@@ -116,6 +121,12 @@ impl GpuBackend {
     pub fn limit_mask_memory(&mut self, bytes: usize) {
         self.mask_memory = bytes;
         self.mask_pool = None;
+    }
+
+    /// Sets whether the fill groups segments by shafts: for measuring both
+    /// on one adapter (the bits are the same either way).
+    pub fn set_fill_shafts(&mut self, shafts: Shafts) {
+        self.fill_shafts = shafts;
     }
 
     pub fn threads(&self) -> usize {
@@ -282,9 +293,15 @@ impl GpuBackend {
         let mut direct = match (method, light_mesh) {
             (FrameMethod::FormulaOne, _) => DirectMethod::Whitted,
             (FrameMethod::Lamps, _) => DirectMethod::Area,
-            (FrameMethod::LightMesh { .. }, Some(mesh)) => DirectMethod::LightMesh(Box::new(
-                LightMeshShading::new(&self.context, mesh, &mut pool, method, job)?,
-            )),
+            (FrameMethod::LightMesh { .. }, Some(mesh)) => {
+                DirectMethod::LightMesh(Box::new(LightMeshShading::new(
+                    &self.context,
+                    mesh,
+                    &mut pool,
+                    (method, self.fill_shafts),
+                    job,
+                )?))
+            }
             (FrameMethod::LightMesh { .. }, None) => return Err(RenderError::NoLightMesh),
         };
         let frame = self.frame(job, lights);
