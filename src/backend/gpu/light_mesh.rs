@@ -119,6 +119,8 @@ pub struct LightMeshShading<'m> {
 /// answers the CPU's store has not taken yet.
 struct PendingFill {
     demand: Demand,
+    /// The demand's bricks, whose slots the fill wrote.
+    bricks: Vec<IVec3>,
     fill: SegmentFill,
     answers: FillAnswers,
 }
@@ -237,6 +239,7 @@ impl<'m> LightMeshShading<'m> {
         )?;
         self.pending = Some(PendingFill {
             demand,
+            bricks,
             fill,
             answers,
         });
@@ -254,12 +257,12 @@ impl<'m> LightMeshShading<'m> {
         pending.answers.keep(downloaded, parts);
         let PendingFill {
             demand,
+            bricks,
             fill,
             answers,
         } = pending;
         let answers = answers.answers();
         (self.mesh).merge_segments(&demand, &fill, &answers, &mut self.work);
-        let bricks: Vec<IVec3> = demand.bricks.iter().map(|brick| brick.brick).collect();
         self.pool.written_on_gpu(self.mesh.masks(), &bricks);
     }
 
