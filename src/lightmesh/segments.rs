@@ -121,6 +121,13 @@ impl From<&Segment> for Place {
 /// brick, so that the tracer's records are made and the answers merged
 /// in parallel, without one list of every segment in between (tens of
 /// millions on a cold frame of many lamps).
+///
+/// A brick's segments go light by light, each light's in slot order, so
+/// that neighbouring threads of the tracer (a row of the brick's nodes)
+/// trace nearly the same path through the scene towards one light, where
+/// node by node they set off towards every light in turn: on lavapipe's
+/// eight-wide lanes that made the city fly-through's fill trace about
+/// twice as fast (BENCHMARKS.md, "The fill in light order").
 #[derive(Clone, Debug, Default)]
 pub struct SegmentFill {
     bricks: Vec<BrickFill>,
@@ -139,7 +146,7 @@ struct BrickFill {
 }
 
 impl SegmentFill {
-    /// The segments, in brick, node and light order, each as `record`
+    /// The segments, in brick, light and node order, each as `record`
     /// makes it for the tracer from the brick's index (in the demand's
     /// order) and the segment.
     pub fn records<T: Send>(&self, record: impl Fn(usize, &Segment) -> T + Sync + Send) -> Vec<T> {
@@ -172,7 +179,7 @@ struct WordBits {
 impl LightMesh {
     /// The fill of `demand`'s missing bits: groups settled by shafts
     /// where `shafts` says so, and a segment for each bit left, in brick,
-    /// node and light order. Refuses (before allocating) when the masks
+    /// light and node order (see [`SegmentFill`]). Refuses (before allocating) when the masks
     /// would outgrow the memory limit.
     pub fn fill_segments(
         &self,
@@ -269,9 +276,11 @@ impl LightMesh {
                     }
                 }
             }
-            for slot in 0..BRICK_NODES {
-                for bit in set_bits(bits.test_static[slot] | bits.test_dynamic[slot]) {
-                    let at = 1u64 << bit;
+            let missing = |slot: usize| bits.test_static[slot] | bits.test_dynamic[slot];
+            let lights_missing = (0..BRICK_NODES).fold(0, |all, slot| all | missing(slot));
+            for bit in set_bits(lights_missing) {
+                let at = 1u64 << bit;
+                for slot in (0..BRICK_NODES).filter(|&slot| missing(slot) & at != 0) {
                     fill.segments.push(Segment {
                         node: slot as u16,
                         light: (word * 64 + bit) as u32,
@@ -445,6 +454,49 @@ mod tests {
     use super::*;
     use crate::lightmesh::demand::BrickDemand;
     use crate::lightmesh::lattice::Lattice;
+
+    /// A brick's segments come light by light, nodes in slot order within
+    /// a light, one for each needed bit the store lacks.
+    #[test]
+    fn a_bricks_segments_go_light_by_light() {
+        let lights: Vec<RenderLight> = (0..5)
+            .map(|i| RenderLight {
+                source: crate::render::light::LightSource::Point {
+                    position: Vec3::new(i as f32, 9.0, 0.0),
+                },
+                power: Vec3::ONE,
+                range: None,
+                lamp_radius: 0.0,
+            })
+            .collect();
+        let mut mesh = LightMesh::new(Lattice::new(0.2), 2.5, lights.len(), 1 << 30);
+        // Node 7 already holds light 1's bit in both layers.
+        let mut known = LayerUpdate::zeroed(BRICK_NODES);
+        known.static_computed[7] = 0b10;
+        known.dynamic_computed[7] = 0b10;
+        mesh.masks.merge_brick(IVec3::ZERO, &known);
+        let mut needed = vec![0u64; BRICK_NODES];
+        for (slot, bits) in [(300, 0b10001), (7, 0b00110), (40, 0b10010), (0, 0b00100)] {
+            needed[slot] = bits;
+        }
+        let demand = Demand {
+            bricks: vec![BrickDemand {
+                brick: IVec3::ZERO,
+                needed: needed.into(),
+            }],
+            words: 1,
+            ..Demand::default()
+        };
+        let world = World::build(&[]);
+        let fill = (mesh.fill_segments(&demand, &lights, &world, Shafts::Skip)).unwrap();
+        let order: Vec<(u32, u16)> = (fill.bricks[0].segments.iter())
+            .map(|segment| (segment.light, segment.node))
+            .collect();
+        assert_eq!(
+            order,
+            [(0, 300), (1, 40), (2, 0), (2, 7), (4, 40), (4, 300)]
+        );
+    }
 
     /// The rule the GPU's fill writes the pool by (`fill_segments.wgsl`)
     /// is the store's fold of what the merge records: over every state a
