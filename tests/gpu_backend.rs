@@ -23,13 +23,15 @@ use std::path::Path;
 use glam::IVec3;
 use glam::{Affine3A, DMat4, DQuat, DVec3, Quat, Vec2, Vec3};
 use lmanim::accel::{Hit, Ray, World, WorldObject};
+use lmanim::backend::gpu::enclosure::ProbeSite;
 use lmanim::backend::gpu::fill::SEGMENTS_PER_WAIT;
 use lmanim::backend::gpu::mask_pool::MaskPool;
 use lmanim::backend::gpu::{FrameLights, GpuError};
 use lmanim::backend::{Backend, GpuBackend};
 use lmanim::lightmesh::demand::{BrickDemand, Demand};
+use lmanim::lightmesh::enclosure::{self, ProbeList};
 use lmanim::lightmesh::lattice::Lattice;
-use lmanim::lightmesh::masks::BRICK_NODES;
+use lmanim::lightmesh::masks::{self, BRICK_NODES};
 use lmanim::lightmesh::segments::Shafts;
 use lmanim::lightmesh::{LightMesh, LightMeshStats};
 use lmanim::output::{read_exr, Image};
@@ -1083,6 +1085,141 @@ fn a_fill_without_shafts_renders_the_same_frames() {
             assert!(stats_without.fill_segments > stats.fill_segments);
         }
     }
+}
+
+/// LMM1's enclosure probes on the GPU give the CPU's flag at every node
+/// of twelve bricks around a box resting on a floor and a tilted box
+/// beside it: nodes inside, outside, under the floor, and on the boxes'
+/// faces and the floor's plane (the lattice puts nodes on them, where
+/// probes graze the faces they start on).
+#[test]
+fn gpu_enclosure_probes_give_the_cpus_flags() {
+    let Some(mut gpu) = gpu() else { return };
+    if !gpu.rounds_as_the_cpu() {
+        eprintln!("skipped: {} does not round as the CPU does", gpu.adapter());
+        return;
+    }
+    let (positions, triangles) = cube(2);
+    let floor = [
+        Vec3::new(-3.0, 0.0, -3.0),
+        Vec3::new(-3.0, 0.0, 3.0),
+        Vec3::new(3.0, 0.0, 3.0),
+        Vec3::new(3.0, 0.0, -3.0),
+    ];
+    let object = |positions, triangles, to_render| WorldObject {
+        positions,
+        triangles,
+        to_render,
+        dynamic: false,
+    };
+    let tilt = Quat::from_axis_angle(Vec3::new(1.0, 0.0, 1.0).normalize(), 0.5);
+    let world = World::build(&[
+        object(&floor, &[[0, 1, 2], [0, 2, 3]], Affine3A::IDENTITY),
+        object(
+            &positions,
+            &triangles,
+            Affine3A::from_scale_rotation_translation(
+                Vec3::splat(0.5),
+                Quat::IDENTITY,
+                Vec3::new(-0.3, 0.5, -0.3),
+            ),
+        ),
+        object(
+            &positions,
+            &triangles,
+            Affine3A::from_scale_rotation_translation(
+                Vec3::splat(0.25),
+                tilt,
+                Vec3::new(0.45, 0.3, 0.4),
+            ),
+        ),
+    ]);
+    let lattice = Lattice::new(0.1);
+    let reach = 0.8;
+    let bricks: Vec<IVec3> = (0..12)
+        .map(|i: i32| IVec3::new(i % 2 - 1, i / 2 % 3 - 1, i / 6 - 1))
+        .collect();
+    let probes = ProbeList {
+        bricks: vec![(0..BRICK_NODES as u16).collect(); bricks.len()],
+        reused: 0,
+    };
+    let on_cpu: Vec<bool> = (probes.nodes())
+        .map(|(brick, slot)| {
+            let at = lattice.node_position(masks::join(bricks[brick], slot as usize));
+            enclosure::is_enclosed(&world, at, reach)
+        })
+        .collect();
+    let passes = gpu.passes_for(&world).expect("upload");
+    let on_gpu = (passes.probes)
+        .trace(
+            passes.context,
+            passes.scene,
+            (&lattice, reach),
+            &bricks,
+            &probes,
+        )
+        .expect("GPU probes");
+    let enclosed = on_cpu.iter().filter(|&&enclosed| enclosed).count();
+    assert!(
+        enclosed > 500 && enclosed < on_cpu.len() - 500,
+        "{enclosed} of {} nodes enclosed",
+        on_cpu.len()
+    );
+    let differing: Vec<IVec3> = (probes.nodes().zip(on_cpu.iter().zip(&on_gpu)))
+        .filter(|(_, (cpu, gpu))| cpu != gpu)
+        .map(|((brick, slot), _)| masks::join(bricks[brick], slot as usize))
+        .collect();
+    assert!(differing.is_empty(), "flags differ at nodes {differing:?}");
+}
+
+/// The courtyard's frames (the ball rolling, masks reused) are the same
+/// images whether LMM1's probes run on the CPU or the GPU, which probes
+/// the same nodes and writes their flags into the pool as the store
+/// records them; with the probes on the GPU, no brick goes up for a flag.
+#[test]
+fn enclosure_probes_on_the_gpu_render_the_same_frames() {
+    let settings = courtyard_lmm1();
+    let mut frames = Vec::new();
+    for site in [ProbeSite::Cpu, ProbeSite::Gpu] {
+        let Some(mut gpu) = gpu() else { return };
+        if !gpu.rounds_as_the_cpu() {
+            eprintln!("skipped: {} does not round as the CPU does", gpu.adapter());
+            return;
+        }
+        gpu.set_probe_site(site);
+        let mut backend = Backend::Gpu(Box::new(gpu));
+        let mut sequence = Sequence::load(&sample("courtyard.gltf")).expect("courtyard");
+        let mut rendered = Vec::new();
+        for frame in 0..3 {
+            let mut stats = FrameStats::default();
+            let time = frame as f64 / 24.0;
+            let placed = (sequence.advance(time, &settings, &mut stats)).expect("camera");
+            let image =
+                (sequence.render(&mut backend, &placed, &settings, &mut stats)).expect("frame");
+            common::gpu::assert_pool_holds_the_store(&backend, &sequence, frame);
+            rendered.push((image, stats.lightmesh.expect("light-mesh stats")));
+        }
+        frames.push(rendered);
+    }
+    let (on_cpu, on_gpu) = (&frames[0], &frames[1]);
+    for (frame, ((image, stats), (gpu_image, gpu_stats))) in on_cpu.iter().zip(on_gpu).enumerate() {
+        assert!(image == gpu_image, "frame {frame} differs");
+        assert_eq!(gpu_stats.nodes_probed, stats.nodes_probed, "frame {frame}");
+        assert_eq!(
+            gpu_stats.enclosure_reused, stats.enclosure_reused,
+            "frame {frame}"
+        );
+    }
+    assert!(on_cpu[0].1.nodes_probed > 0, "the first frame probes");
+    let uploaded = |frames: &[(Image, LightMeshStats)]| -> u64 {
+        frames.iter().map(|(_, stats)| stats.bricks_uploaded).sum()
+    };
+    assert!(
+        uploaded(on_gpu) < uploaded(on_cpu),
+        "bricks up: {} with the GPU's probes, {} with the CPU's",
+        uploaded(on_gpu),
+        uploaded(on_cpu)
+    );
 }
 
 /// A mask pool smaller than the frame's bricks evicts bricks no level

@@ -130,53 +130,123 @@ pub struct EnclosureWork {
     pub reused: u64,
 }
 
+/// The nodes of a demand whose enclosure flags are to be settled, brick
+/// by brick in the demand's order: the CPU probes them where it fills
+/// ([`LightMesh::settle_enclosure`]), the GPU beside its fill
+/// (`backend::gpu::enclosure`), and either answer goes into the store
+/// by [`LightMesh::merge_probes`].
+#[derive(Clone, Debug, Default)]
+pub struct ProbeList {
+    /// Per brick of the demand, its slots to probe, in slot order.
+    pub bricks: Vec<Vec<u16>>,
+    /// Nodes a point asked about whose flag was already settled.
+    pub reused: u64,
+}
+
+impl ProbeList {
+    /// How many nodes are to be probed.
+    pub fn len(&self) -> usize {
+        self.bricks.iter().map(Vec::len).sum()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// (brick's index in the demand, slot) of each node, in order.
+    pub fn nodes(&self) -> impl Iterator<Item = (usize, u16)> + '_ {
+        (self.bricks.iter().enumerate())
+            .flat_map(|(brick, slots)| slots.iter().map(move |&slot| (brick, slot)))
+    }
+}
+
 impl LightMesh {
-    /// Settles the enclosure flag of every node `demand` names that is
-    /// blocked from some light it is asked for, or may be (its bit is not
-    /// valid yet), and has no flag yet, in parallel over bricks. After
-    /// the CPU's fill every needed bit is valid; the GPU's may still be
-    /// tracing.
-    pub fn settle_enclosure(&mut self, demand: &Demand, world: &World) -> EnclosureWork {
-        let reach = REACH_IN_RADII * self.radius();
+    /// The nodes `demand` names whose enclosure flag is not settled yet
+    /// and that are blocked from some light they are asked for, or may be
+    /// (its bit is not valid yet). After the CPU's fill every needed bit
+    /// is valid; the GPU's may still be tracing.
+    pub fn nodes_to_probe(&self, demand: &Demand) -> ProbeList {
         let words = demand.words;
-        let settled: Vec<(IVec3, BrickEnclosure, u64)> = demand
-            .bricks
-            .par_iter()
-            .filter_map(|brick| {
+        let bricks: Vec<(Vec<u16>, u64)> = (demand.bricks.par_iter())
+            .map(|brick| {
                 let known = self.masks.enclosure(brick.brick).known;
-                let bits = self.masks.brick(brick.brick)?;
-                let mut settled = BrickEnclosure::default();
+                let Some(bits) = self.masks.brick(brick.brick) else {
+                    return (Vec::new(), 0);
+                };
+                let mut slots = Vec::new();
                 let mut reused = 0;
                 for slot in 0..BRICK_NODES {
-                    let bit = 1u64 << (slot % 64);
                     let mask = self.masks.slot_mask(bits, slot);
                     let needed = &brick.needed[slot * words..(slot + 1) * words];
                     if !blocks_some(&mask, needed) && !misses_some(&mask, needed) {
                         continue;
                     }
-                    if known[slot / 64] & bit != 0 {
+                    if known[slot / 64] >> (slot % 64) & 1 == 1 {
                         reused += 1;
-                        continue;
-                    }
-                    settled.known[slot / 64] |= bit;
-                    let at = self.lattice.node_position(join(brick.brick, slot));
-                    if is_enclosed(world, at, reach) {
-                        settled.enclosed[slot / 64] |= bit;
+                    } else {
+                        slots.push(slot as u16);
                     }
                 }
-                Some((brick.brick, settled, reused))
+                (slots, reused)
             })
             .collect();
-        let mut work = EnclosureWork::default();
-        for (brick, flags, reused) in &settled {
-            work.reused += reused;
-            let probed: u64 = flags.known.iter().map(|w| w.count_ones() as u64).sum();
-            if probed > 0 {
-                work.probed += probed;
-                self.masks.merge_enclosure(*brick, flags);
-            }
+        ProbeList {
+            reused: bricks.iter().map(|(_, reused)| reused).sum(),
+            bricks: bricks.into_iter().map(|(slots, _)| slots).collect(),
         }
-        work
+    }
+
+    /// Settles the flag of every node [`LightMesh::nodes_to_probe`] names
+    /// by probing `world` on the CPU, in parallel over bricks.
+    pub fn settle_enclosure(&mut self, demand: &Demand, world: &World) -> EnclosureWork {
+        let probes = self.nodes_to_probe(demand);
+        let reach = self.probe_reach();
+        let enclosed: Vec<Vec<bool>> = (demand.bricks.par_iter().zip(&probes.bricks))
+            .map(|(brick, slots)| {
+                (slots.iter())
+                    .map(|&slot| {
+                        let at = self.lattice.node_position(join(brick.brick, slot as usize));
+                        is_enclosed(world, at, reach)
+                    })
+                    .collect()
+            })
+            .collect();
+        self.merge_probes(demand, &probes, &enclosed.concat())
+    }
+
+    /// How far a node's probes reach: [`REACH_IN_RADII`] radii.
+    pub fn probe_reach(&self) -> f32 {
+        REACH_IN_RADII * self.radius()
+    }
+
+    /// Records the flags of `probes`' nodes (of `demand`'s bricks):
+    /// whether each is `enclosed`, one answer per node in the list's order.
+    pub fn merge_probes(
+        &mut self,
+        demand: &Demand,
+        probes: &ProbeList,
+        enclosed: &[bool],
+    ) -> EnclosureWork {
+        debug_assert_eq!(enclosed.len(), probes.len());
+        let mut answers = enclosed.iter();
+        for (brick, slots) in demand.bricks.iter().zip(&probes.bricks) {
+            if slots.is_empty() {
+                continue;
+            }
+            let mut settled = BrickEnclosure::default();
+            for (&slot, &enclosed) in slots.iter().zip(&mut answers) {
+                let (word, bit) = (slot as usize / 64, 1u64 << (slot % 64));
+                settled.known[word] |= bit;
+                if enclosed {
+                    settled.enclosed[word] |= bit;
+                }
+            }
+            self.masks.merge_enclosure(brick.brick, &settled);
+        }
+        EnclosureWork {
+            probed: probes.len() as u64,
+            reused: probes.reused,
+        }
     }
 }
 

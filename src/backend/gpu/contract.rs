@@ -21,7 +21,7 @@
 
 use crate::lightmesh::kernel::Kernel;
 use crate::lightmesh::penumbra::{self, Penumbra};
-use crate::lightmesh::{faint, lamp_disk, lattice, masks, wide_ball};
+use crate::lightmesh::{enclosure, faint, lamp_disk, lattice, masks, wide_ball};
 use crate::plan::Shadows;
 
 /// Declares each constant once: as a Rust `pub const` and as a line of
@@ -87,8 +87,8 @@ contract! {
     DIRECTORY: u32 = 12;
     /// The surface pass's mesh words.
     MESH_WORDS: u32 = 12;
-    /// The fill's bricks: where their nodes lie and their slots start
-    /// (`fill.rs`'s `FillTable`).
+    /// A level's bricks, which its fill and enclosure probes write: where
+    /// their nodes lie and their slots start (`fill.rs`'s `FillTable`).
     FILL_BRICKS: u32 = 12;
     /// The mask pool's slots.
     POOL: u32 = 13;
@@ -243,6 +243,9 @@ contract! {
     VISIBLE: u32 = 0;
     /// The word of which of those bits are valid.
     VALID: u32 = 1;
+    /// u32 words of a brick's enclosure flags of each kind, after its
+    /// nodes' words: `known`, then `enclosed` (`masks::BrickEnclosure`).
+    FLAG_WORDS: u32 = 2 * masks::BRICK_WORDS as u32;
 
     // The light mesh's geometry, as the CPU bounds it.
     /// Nodes along one axis of a half-ball's box, at most.
@@ -262,6 +265,8 @@ contract! {
     FAINT_BUDGET_BITS: u32 = faint::BUDGET_BITS;
     /// Samples of the lamp's disk (`lamp_disk::DISK`).
     DISK_SAMPLES: u32 = lamp_disk::DISK.len() as u32;
+    /// LMM1's probe directions per node (`enclosure::PROBES`).
+    PROBE_COUNT: u32 = enclosure::PROBES.len() as u32;
 }
 
 /// A constant as WGSL declares it.

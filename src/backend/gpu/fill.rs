@@ -23,7 +23,7 @@ use super::contract::{
 use super::direct::FrameLights;
 use super::mask_pool::MaskPool;
 use super::pass::{answer_buffer, Dispatch, WorldPass, WorldUse, BATCH};
-use super::recording::{Downloaded, Downloads, Part, Recording};
+use super::recording::{Downloaded, Downloads, Part, PendingWords, Recording};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
 use crate::lightmesh::lattice::Lattice;
@@ -58,18 +58,20 @@ impl FillSegment {
     }
 }
 
-/// `fill_segments.wgsl`'s `FillHeader`: the lattice, and the u32 light
-/// words of a node in the pool.
+/// `level_bricks.wgsl`'s `FillHeader`: the lattice, the u32 light words
+/// of a node in the pool, and how far LMM1's enclosure probes reach
+/// (`super::enclosure`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct FillHeader {
     origin: [f32; 3],
     h: f32,
     light_words: u32,
-    _pad: [u32; 3],
+    probe_reach: f32,
+    _pad: [u32; 2],
 }
 
-/// `fill_segments.wgsl`'s `FillBrick`: a brick of the fill, and the pool
+/// `level_bricks.wgsl`'s `FillBrick`: a brick of the level, and the pool
 /// word where its slot starts.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -78,8 +80,9 @@ pub struct FillBrick {
     slot_start: u32,
 }
 
-/// Where a fill's segments lie and write: the lattice and, per brick of
-/// the fill (in its order), its coordinates and its slot in the pool.
+/// Where a level's fill segments and enclosure probes lie and write: the
+/// lattice and, per brick of the level's demand (in its order), its
+/// coordinates and its slot in the pool. Uploaded once a level, for both.
 pub struct FillTable {
     header: FillHeader,
     bricks: Vec<FillBrick>,
@@ -89,9 +92,9 @@ impl FillTable {
     /// The table of `bricks` on `lattice`, each with the pool word where
     /// its slot starts where it has one (a brick without one has no
     /// segment to write), in a pool of `light_words` u32 light words per
-    /// node.
+    /// node; probes reach `probe_reach`.
     pub fn new(
-        lattice: &Lattice,
+        (lattice, probe_reach): (&Lattice, f32),
         light_words: usize,
         bricks: &[IVec3],
         slot_starts: &[Option<usize>],
@@ -101,7 +104,8 @@ impl FillTable {
                 origin: lattice.origin.to_array(),
                 h: lattice.h,
                 light_words: light_words as u32,
-                _pad: [0; 3],
+                probe_reach,
+                _pad: [0; 2],
             },
             bricks: (bricks.iter().zip(slot_starts))
                 .map(|(brick, start)| FillBrick {
@@ -112,11 +116,33 @@ impl FillTable {
         }
     }
 
-    /// The header and the bricks, as the shader reads them.
-    fn bytes(&self) -> Vec<u8> {
-        let mut bytes = bytemuck::bytes_of(&self.header).to_vec();
-        bytes.extend_from_slice(bytemuck::cast_slice(&self.bricks));
-        bytes
+    /// `bricks` (on `place`'s lattice) in a scratch pool of their own, a
+    /// slot each in order, of `light_words` light words per node: the
+    /// table uploaded, and the pool, for running a level's passes outside
+    /// a frame.
+    pub fn scratch(
+        context: &GpuContext,
+        place: (&Lattice, f32),
+        light_words: usize,
+        bricks: &[IVec3],
+    ) -> Result<(wgpu::Buffer, wgpu::Buffer), GpuError> {
+        let slot_words = MaskPool::slot_bytes(light_words) / size_of::<u32>();
+        let starts: Vec<Option<usize>> = (0..bricks.len())
+            .map(|brick| Some(brick * slot_words))
+            .collect();
+        let table = FillTable::new(place, light_words, bricks, &starts).upload(context)?;
+        let pool = answer_buffer::<u32>(context, "scratch pool", bricks.len() * slot_words)?;
+        Ok((table, pool))
+    }
+
+    /// The header and the bricks, uploaded as the shaders read them.
+    pub fn upload(&self, context: &GpuContext) -> Result<wgpu::Buffer, GpuError> {
+        context.checked("the level's bricks", || {
+            let mut bytes = bytemuck::bytes_of(&self.header).to_vec();
+            bytes.extend_from_slice(bytemuck::cast_slice(&self.bricks));
+            context.check_binding("fill bricks", bytes.len() as u64)?;
+            Ok(context.upload("fill bricks", &bytes, wgpu::BufferUsages::STORAGE))
+        })
     }
 }
 
@@ -145,8 +171,8 @@ impl FillPass {
     }
 
     /// Records the tracing of `fill`'s segments against `scene` with
-    /// `lights`, each bit written into `pool`, where `table` places the
-    /// fill's bricks. Waits only between groups of `per_wait` segments
+    /// `lights`, each bit written into `pool`, where `table` (a
+    /// [`FillTable`] uploaded) places the fill's bricks. Waits only between groups of `per_wait` segments
     /// ([`SEGMENTS_PER_WAIT`] but in tests; a whole number of answer
     /// words), where there are more; the answers left come back with the
     /// CPU's next wait.
@@ -157,18 +183,13 @@ impl FillPass {
         recording: &mut Recording,
         scene: &GpuScene,
         lights: &FrameLights,
-        (pool, table): (&wgpu::Buffer, &FillTable),
+        (pool, table): (&wgpu::Buffer, &wgpu::Buffer),
         fill: &SegmentFill,
         per_wait: usize,
     ) -> Result<FillAnswers, GpuError> {
         // Each group's answers then start a word of their own.
         assert!(per_wait > 0 && per_wait.is_multiple_of(ANSWERS_PER_WORD as usize));
         let segments = fill.records(FillSegment::new);
-        let table = context.checked(Entry::FillSegments.name(), || {
-            let bytes = table.bytes();
-            context.check_binding("fill bricks", bytes.len() as u64)?;
-            Ok::<_, GpuError>(context.upload("fill bricks", &bytes, wgpu::BufferUsages::STORAGE))
-        })?;
         context.traffic.traced(segments.len() as u64);
         let mut answers = FillAnswers {
             count: segments.len(),
@@ -184,12 +205,12 @@ impl FillPass {
                     let dispatch = Dispatch::new(scene, batch.len()).with_lights(lights.count());
                     let reads = [
                         (ITEMS, &items),
-                        (FILL_BRICKS, &table),
+                        (FILL_BRICKS, table),
                         (LIGHTS, lights.buffer()),
                         (POOL, pool),
                     ];
                     (self.pass).record(context, recording.encoder(), dispatch, &reads, &out);
-                    answers.pending.push((out, words));
+                    answers.words.push(out, words);
                 }
                 Ok::<_, GpuError>(())
             })?;
@@ -219,12 +240,7 @@ impl FillPass {
         per_wait: usize,
     ) -> Result<Vec<SegmentAnswer>, GpuError> {
         let light_words = MaskPool::light_words(lights.count() as usize);
-        let slot_words = MaskPool::slot_bytes(light_words) / size_of::<u32>();
-        let starts: Vec<Option<usize>> = (0..bricks.len())
-            .map(|brick| Some(brick * slot_words))
-            .collect();
-        let table = FillTable::new(lattice, light_words, bricks, &starts);
-        let scratch = answer_buffer::<u32>(context, "scratch pool", bricks.len() * slot_words)?;
+        let (table, scratch) = FillTable::scratch(context, (lattice, 0.0), light_words, bricks)?;
         let mut recording = Recording::new(context);
         let mut answers = self.record(
             context,
@@ -235,22 +251,17 @@ impl FillPass {
             fill,
             per_wait,
         )?;
-        let mut downloads = Downloads::default();
-        let parts = answers.download(&mut downloads);
-        let downloaded = recording.wait("the fill's answers, for comparing", downloads)?;
-        answers.keep(&downloaded, parts);
+        (answers.words).wait_for_all(&mut recording, "the fill's answers, for comparing")?;
         Ok(answers.answers())
     }
 }
 
-/// The answers of a level's fill: those a wait within the fill brought
-/// back, and the buffers of those still on the GPU, which the CPU's next
-/// wait brings back ([`FillAnswers::download`]).
+/// The answers of a level's fill, [`ANSWERS_PER_WORD`] to a word in the
+/// segments' order: those a wait within the fill brought back, and those
+/// the CPU's next wait brings back.
 #[derive(Default)]
 pub struct FillAnswers {
-    /// [`ANSWERS_PER_WORD`] answers to a word, in the segments' order.
-    words: Vec<u32>,
-    pending: Vec<(wgpu::Buffer, usize)>,
+    words: PendingWords,
     /// Segments answered.
     count: usize,
 }
@@ -258,25 +269,20 @@ pub struct FillAnswers {
 impl FillAnswers {
     /// Adds the answers still on the GPU to what a wait brings back.
     pub fn download<'s>(&'s self, downloads: &mut Downloads<'s>) -> Vec<Part<u32>> {
-        (self.pending.iter())
-            .map(|(buffer, words)| downloads.add(buffer, *words))
-            .collect()
+        self.words.download(downloads)
     }
 
     /// Keeps what a wait brought back of `parts`.
     pub fn keep(&mut self, downloaded: &Downloaded, parts: Vec<Part<u32>>) {
-        for part in parts {
-            self.words.extend(downloaded.take(part));
-        }
-        self.pending.clear();
+        self.words.keep(downloaded, parts);
     }
 
     /// One answer per segment, in order, once every part is back.
     pub fn answers(&self) -> Vec<SegmentAnswer> {
-        debug_assert!(self.pending.is_empty(), "answers still on the GPU");
+        let words = self.words.words();
         (0..self.count)
             .map(|index| {
-                let bits = self.words[index / ANSWERS_PER_WORD as usize]
+                let bits = words[index / ANSWERS_PER_WORD as usize]
                     >> (ANSWER_BITS * (index as u32 % ANSWERS_PER_WORD));
                 SegmentAnswer {
                     static_blocked: bits & STATIC_BLOCKED != 0,

@@ -233,7 +233,7 @@ impl Frame<'_> {
             DirectMethod::LightMesh(light_mesh) => {
                 let reach = light_mesh.prepare(
                     &pipelines.light_mesh,
-                    &pipelines.fill,
+                    (&pipelines.fill, &pipelines.probes),
                     context,
                     self.job,
                     scene,

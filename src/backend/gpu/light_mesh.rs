@@ -8,12 +8,14 @@
 //! reaching lights and finds those whose every node already holds valid
 //! bits in the pool; only the others come back (copied out by the pass,
 //! with its flags), for the CPU's demand. The bits they miss are settled
-//! by the CPU fill's shafts where those are clear, and LMM1's enclosure
-//! probes run on the CPU; the pool takes the words of the bricks edited.
-//! The bits left are traced on the GPU ([`super::fill`]), which writes
-//! them into the pool itself: the level's shading follows without a wait,
-//! and the answers reach the CPU's store at its next wait (the next
-//! level's coverage, or the band's end). So the masks the shader reads are
+//! by the CPU fill's shafts where those are clear; the pool takes the
+//! words of the bricks edited. The bits left are traced on the GPU
+//! ([`super::fill`]), and LMM1's enclosure probes run beside them
+//! ([`super::enclosure`]; on the CPU, before the fill, where the adapter
+//! is a software one or does not round as the CPU does); both write into
+//! the pool themselves: the level's shading
+//! follows without a wait, and the answers reach the CPU's store at its
+//! next wait (the next level's coverage, or the band's end). So the masks the shader reads are
 //! the CPU backend's bit for bit, and what runs on the GPU is the
 //! per-point work: the half-ball, LMM's point-to-node segments, the
 //! counts and Omega, and formula (1) where the set is empty.
@@ -29,6 +31,7 @@ use super::contract::{
     LIGHT_MESH_COUNTERS, LOOPS_CUT_SHORT, POOL, REACH,
 };
 use super::direct::FrameLights;
+use super::enclosure::{ProbeAnswers, ProbePass, ProbeSite};
 use super::fill::{FillAnswers, FillPass, FillTable, SEGMENTS_PER_WAIT};
 use super::layered::{LayeredPass, PointLayers};
 use super::mask_pool::MaskPool;
@@ -39,6 +42,7 @@ use super::shaders::Entry;
 use super::surface::{LevelBuffers, SurfacePoint};
 use crate::backend::RenderError;
 use crate::lightmesh::demand::Demand;
+use crate::lightmesh::enclosure::ProbeList;
 use crate::lightmesh::interpolate::PointCounts;
 use crate::lightmesh::segments::{SegmentFill, Shafts};
 use crate::lightmesh::{LightMesh, LightMeshStats};
@@ -98,6 +102,8 @@ pub struct LightMeshShading<'m> {
     mesh: &'m mut LightMesh,
     pool: &'m mut MaskPool,
     point_to_node_tests: bool,
+    /// Where LMM1's enclosure probes run.
+    probe_site: ProbeSite,
     /// Whether the fill's segments are first grouped by shafts.
     shafts: Shafts,
     /// The frame's lights with only those the light mesh shades powered:
@@ -115,21 +121,28 @@ pub struct LightMeshShading<'m> {
     pending: Option<PendingFill>,
 }
 
-/// A level's fill whose bits the GPU has written into the pool and whose
-/// answers the CPU's store has not taken yet.
+/// A level's fill (and enclosure probes) whose bits the GPU has written
+/// into the pool and whose answers the CPU's store has not taken yet.
 struct PendingFill {
     demand: Demand,
     /// The demand's bricks, whose slots the fill wrote.
     bricks: Vec<IVec3>,
     fill: SegmentFill,
     answers: FillAnswers,
+    probes: Option<(ProbeList, ProbeAnswers)>,
+}
+
+/// Where a wait's downloads hold a pending fill's answers.
+struct FillParts {
+    fill: Vec<Part<u32>>,
+    probes: Vec<Part<u32>>,
 }
 
 /// Where a wait's downloads hold the light mesh's part: formula (2)'s
 /// counters (at a band's end) and a fill's answers.
 pub struct LightMeshParts {
     counts: Part<Counters>,
-    fill: Vec<Part<u32>>,
+    fill: FillParts,
 }
 
 /// The reaching lights of a level's points, as the coverage pass made
@@ -143,7 +156,7 @@ impl<'m> LightMeshShading<'m> {
         context: &GpuContext,
         mesh: &'m mut LightMesh,
         pool: &'m mut MaskPool,
-        (method, shafts): (FrameMethod, Shafts),
+        (method, shafts, probe_site): (FrameMethod, Shafts, ProbeSite),
         job: &FrameJob,
     ) -> Result<LightMeshShading<'m>, RenderError> {
         let lights = &job.frame.lights;
@@ -151,6 +164,7 @@ impl<'m> LightMeshShading<'m> {
             mesh,
             pool,
             point_to_node_tests: method.tests_point_to_node(),
+            probe_site,
             shafts,
             lanes: (job.shadows).lanes(method, lights, |role| role == LightRole::LightMesh),
             work: LightMeshStats::default(),
@@ -163,16 +177,16 @@ impl<'m> LightMeshShading<'m> {
     /// Makes every mask bit `level`'s points need valid and resident in
     /// the pool before their shading, recorded after this: the coverage
     /// pass finds the points the pool does not serve yet, and only those
-    /// come back for the CPU's demand, shafts and enclosure stages (as the
-    /// CPU backend runs them), after the level's one wait (where the pass
-    /// had too little room to copy them all, one more gathers them); the
-    /// bits left are traced on the GPU, into the pool, with no wait.
-    /// Returns the points' reaching lights.
+    /// come back for the CPU's demand and shafts (as the CPU backend runs
+    /// them), after the level's one wait (where the pass had too little
+    /// room to copy them all, one more gathers them); the bits left are
+    /// traced on the GPU, and the nodes' enclosure probed, into the pool,
+    /// with no wait. Returns the points' reaching lights.
     #[allow(clippy::too_many_arguments)]
     pub fn prepare(
         &mut self,
         passes: &LightMeshPasses,
-        fill_pass: &FillPass,
+        (fill_pass, probe_pass): (&FillPass, &ProbePass),
         context: &GpuContext,
         job: &FrameJob,
         scene: &GpuScene,
@@ -205,11 +219,18 @@ impl<'m> LightMeshShading<'m> {
         self.mesh.settle_shafts(&demand, &fill);
         stats.add_stage_time("fill", start.elapsed().as_secs_f64());
 
+        let mut probes = None;
         if !p2n {
             let start = Instant::now();
-            let enclosure = self.mesh.settle_enclosure(&demand, job.world);
-            self.work.nodes_probed += enclosure.probed;
-            self.work.enclosure_reused += enclosure.reused;
+            if self.probe_site == ProbeSite::Gpu {
+                let list = self.mesh.nodes_to_probe(&demand);
+                self.work.enclosure_reused += list.reused;
+                probes = Some(list);
+            } else {
+                let enclosure = self.mesh.settle_enclosure(&demand, job.world);
+                self.work.nodes_probed += enclosure.probed;
+                self.work.enclosure_reused += enclosure.reused;
+            }
             stats.add_stage_time("enclosure", start.elapsed().as_secs_f64());
         }
 
@@ -225,7 +246,8 @@ impl<'m> LightMeshShading<'m> {
         let start = Instant::now();
         let light_words = MaskPool::light_words(self.mesh.masks().lights());
         let starts = self.pool.slot_starts(&bricks);
-        let table = FillTable::new(&self.mesh.lattice, light_words, &bricks, &starts);
+        let place = (&self.mesh.lattice, self.mesh.probe_reach());
+        let table = FillTable::new(place, light_words, &bricks, &starts).upload(context)?;
         let (pool, _) = self.pool.buffers();
         let targets = (pool, &table);
         let answers = fill_pass.record(
@@ -237,39 +259,65 @@ impl<'m> LightMeshShading<'m> {
             &fill,
             SEGMENTS_PER_WAIT,
         )?;
+        stats.add_stage_time("fill", start.elapsed().as_secs_f64());
+        let probes = match probes {
+            Some(list) => {
+                let start = Instant::now();
+                let answers = probe_pass.record(context, recording, scene, targets, &list)?;
+                stats.add_stage_time("enclosure", start.elapsed().as_secs_f64());
+                Some((list, answers))
+            }
+            None => None,
+        };
         self.pending = Some(PendingFill {
             demand,
             bricks,
             fill,
             answers,
+            probes,
         });
-        stats.add_stage_time("fill", start.elapsed().as_secs_f64());
         Ok(reach)
     }
 
     /// Gives the CPU's store the last fill's answers, which a wait brought
     /// back (`parts` of `downloaded`): the pool holds those bits already,
     /// so nothing goes up.
-    fn settle_fill(&mut self, downloaded: &Downloaded, parts: Vec<Part<u32>>) {
+    fn settle_fill(&mut self, downloaded: &Downloaded, parts: FillParts) {
         let Some(mut pending) = self.pending.take() else {
             return;
         };
-        pending.answers.keep(downloaded, parts);
+        pending.answers.keep(downloaded, parts.fill);
         let PendingFill {
             demand,
             bricks,
             fill,
             answers,
+            probes,
         } = pending;
         let answers = answers.answers();
         (self.mesh).merge_segments(&demand, &fill, &answers, &mut self.work);
+        if let Some((list, mut answers)) = probes {
+            answers.keep(downloaded, parts.probes);
+            let enclosure = self.mesh.merge_probes(&demand, &list, &answers.enclosed());
+            self.work.nodes_probed += enclosure.probed;
+        }
         self.pool.written_on_gpu(self.mesh.masks(), &bricks);
     }
 
-    /// Adds the last fill's answers, where they are still on the GPU, to
-    /// what a wait brings back.
-    fn download_fill<'s>(&'s self, downloads: &mut Downloads<'s>) -> Vec<Part<u32>> {
-        (self.pending.as_ref()).map_or_else(Vec::new, |pending| pending.answers.download(downloads))
+    /// Adds the last fill's answers (and its probes'), where they are
+    /// still on the GPU, to what a wait brings back.
+    fn download_fill<'s>(&'s self, downloads: &mut Downloads<'s>) -> FillParts {
+        let Some(pending) = self.pending.as_ref() else {
+            return FillParts {
+                fill: Vec::new(),
+                probes: Vec::new(),
+            };
+        };
+        FillParts {
+            fill: pending.answers.download(downloads),
+            probes: (pending.probes.as_ref())
+                .map_or_else(Vec::new, |(_, answers)| answers.download(downloads)),
+        }
     }
 
     /// Records `level`'s coverage pass and waits for what the CPU needs

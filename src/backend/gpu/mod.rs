@@ -27,6 +27,7 @@ mod camera;
 mod context;
 mod contract;
 pub(crate) mod direct;
+pub mod enclosure;
 pub mod fill;
 mod film;
 mod frame;
@@ -68,6 +69,7 @@ use crate::render::FrameJob;
 use crate::scene::Material;
 use crate::settings::{Aov, LightMeshSettings};
 use crate::stats::FrameStats;
+use enclosure::{ProbePass, ProbeSite};
 use fill::FillPass;
 use frame::{DirectMethod, Frame};
 use light_mesh::LightMeshShading;
@@ -96,6 +98,9 @@ pub struct GpuBackend {
     /// Whether the light mesh's fill groups its segments by shafts first
     /// (`lightmesh::segments`; [`Shafts::Test`] unless set).
     fill_shafts: Shafts,
+    /// Where LMM1's enclosure probes run ([`ProbeSite::for_adapter`]
+    /// unless set).
+    probe_site: ProbeSite,
 }
 
 impl GpuBackend {
@@ -103,6 +108,7 @@ impl GpuBackend {
     /// pipeline is compiled yet: see [`GpuBackend::prepare_pipelines`].
     pub fn new(threads: Option<usize>) -> Result<GpuBackend, BackendError> {
         let context = GpuContext::new()?;
+        let probe_site = ProbeSite::for_adapter(&context);
         Ok(GpuBackend {
             pool: thread_pool(threads)?,
             pipelines: Pipelines::new(&context),
@@ -113,6 +119,7 @@ impl GpuBackend {
             mask_pool: None,
             mask_memory: LightMeshSettings::default().gpu_memory_mib << 20,
             fill_shafts: Shafts::Test,
+            probe_site,
         })
     }
 
@@ -127,6 +134,13 @@ impl GpuBackend {
     /// on one adapter (the bits are the same either way).
     pub fn set_fill_shafts(&mut self, shafts: Shafts) {
         self.fill_shafts = shafts;
+    }
+
+    /// Sets where LMM1's enclosure probes run: for comparing both on one
+    /// adapter. [`ProbeSite::Gpu`] gives the CPU's flags only where the
+    /// adapter rounds as the CPU does ([`GpuBackend::rounds_as_the_cpu`]).
+    pub fn set_probe_site(&mut self, site: ProbeSite) {
+        self.probe_site = site;
     }
 
     pub fn threads(&self) -> usize {
@@ -198,6 +212,7 @@ impl GpuBackend {
             queries: &self.pipelines.queries,
             direct: &self.pipelines.direct,
             fill: &self.pipelines.fill,
+            probes: &self.pipelines.probes,
             scene,
         })
     }
@@ -298,7 +313,7 @@ impl GpuBackend {
                     &self.context,
                     mesh,
                     &mut pool,
-                    (method, self.fill_shafts),
+                    (method, self.fill_shafts, self.probe_site),
                     job,
                 )?))
             }
@@ -379,5 +394,6 @@ pub struct GpuPasses<'a> {
     pub queries: &'a RayQueries,
     pub direct: &'a DirectLightPass,
     pub fill: &'a FillPass,
+    pub probes: &'a ProbePass,
     pub scene: &'a GpuScene,
 }

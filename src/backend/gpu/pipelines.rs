@@ -12,6 +12,7 @@ use super::aov_film::AovPasses;
 use super::camera::CameraPass;
 use super::context::GpuContext;
 use super::direct::DirectLightPass;
+use super::enclosure::{ProbePass, ProbeSite};
 use super::fill::FillPass;
 use super::film::FilmPasses;
 use super::light_mesh::LightMeshPasses;
@@ -28,6 +29,7 @@ pub struct Pipelines {
     pub surfaces: SurfacePass,
     pub direct: DirectLightPass,
     pub fill: FillPass,
+    pub probes: ProbePass,
     pub light_mesh: LightMeshPasses,
     pub scatter: ScatterPasses,
     pub film: FilmPasses,
@@ -43,6 +45,7 @@ impl Pipelines {
             surfaces: SurfacePass::new(context),
             direct: DirectLightPass::new(context),
             fill: FillPass::new(context),
+            probes: ProbePass::new(context),
             light_mesh: LightMeshPasses::new(context),
             scatter: ScatterPasses::new(context),
             film: FilmPasses::new(context),
@@ -87,6 +90,11 @@ impl Pipelines {
             FrameMethod::LightMesh { .. } => {
                 let mesh = &self.light_mesh;
                 passes.extend([&mesh.coverage, &mesh.gather, &mesh.patch, &self.fill.pass]);
+                if !method.tests_point_to_node()
+                    && ProbeSite::for_adapter(context) == ProbeSite::Gpu
+                {
+                    passes.push(&self.probes.pass);
+                }
             }
             FrameMethod::Lamps => passes.push(&self.queries.any),
             FrameMethod::FormulaOne => {}

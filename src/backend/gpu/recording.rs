@@ -146,3 +146,55 @@ impl Downloaded {
         bytemuck::pod_collect_to_vec(&self.bytes[part.at..end])
     }
 }
+
+/// Words of answers that passes wrote and the CPU has not brought back
+/// yet: those a wait brought back, in the order the passes were
+/// recorded, and the buffers still on the GPU, which the CPU's next wait
+/// brings back ([`PendingWords::download`]) without a wait of its own.
+#[derive(Default)]
+pub struct PendingWords {
+    words: Vec<u32>,
+    pending: Vec<(wgpu::Buffer, usize)>,
+}
+
+impl PendingWords {
+    /// Adds `words` words of `buffer`, written by a pass just recorded.
+    pub fn push(&mut self, buffer: wgpu::Buffer, words: usize) {
+        self.pending.push((buffer, words));
+    }
+
+    /// Adds the words still on the GPU to what a wait brings back.
+    pub fn download<'s>(&'s self, downloads: &mut Downloads<'s>) -> Vec<Part<u32>> {
+        (self.pending.iter())
+            .map(|(buffer, words)| downloads.add(buffer, *words))
+            .collect()
+    }
+
+    /// Keeps what a wait brought back of `parts`.
+    pub fn keep(&mut self, downloaded: &Downloaded, parts: Vec<Part<u32>>) {
+        for part in parts {
+            self.words.extend(downloaded.take(part));
+        }
+        self.pending.clear();
+    }
+
+    /// Waits for the words still on the GPU, which the CPU needs for
+    /// what `why` says: for passes run on their own, outside a frame.
+    pub fn wait_for_all(
+        &mut self,
+        recording: &mut Recording,
+        why: &'static str,
+    ) -> Result<(), GpuError> {
+        let mut downloads = Downloads::default();
+        let parts = self.download(&mut downloads);
+        let downloaded = recording.wait(why, downloads)?;
+        self.keep(&downloaded, parts);
+        Ok(())
+    }
+
+    /// Every word, once all are back.
+    pub fn words(&self) -> &[u32] {
+        debug_assert!(self.pending.is_empty(), "answers still on the GPU");
+        &self.words
+    }
+}

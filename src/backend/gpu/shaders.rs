@@ -70,7 +70,8 @@ impl Arithmetic {
 
 /// The compute entry points: camera rays, the two ray queries, shading
 /// points, formula (1), formula (2) with its coverage of the points and
-/// the gathering of those it does not cover, the Whitted recursion's rays and their
+/// the gathering of those it does not cover, the light mesh's fill and
+/// enclosure probes, the Whitted recursion's rays and their
 /// compaction, and the film; formula (1) and (2) again keeping their
 /// terms per light layer, and the AOV film (camera hits, light layers),
 /// for `--aovs`.
@@ -85,6 +86,7 @@ pub enum Entry {
     GatherPoints,
     PatchPool,
     FillSegments,
+    EnclosureProbes,
     LightMesh,
     Scatter,
     ScanBlocks,
@@ -99,7 +101,7 @@ pub enum Entry {
 }
 
 impl Entry {
-    pub const ALL: [Entry; 20] = [
+    pub const ALL: [Entry; 21] = [
         Entry::CameraRays,
         Entry::ClosestHit,
         Entry::AnyHit,
@@ -109,6 +111,7 @@ impl Entry {
         Entry::GatherPoints,
         Entry::PatchPool,
         Entry::FillSegments,
+        Entry::EnclosureProbes,
         Entry::LightMesh,
         Entry::Scatter,
         Entry::ScanBlocks,
@@ -145,6 +148,7 @@ impl Entry {
             Entry::GatherPoints => "gather_points",
             Entry::PatchPool => "patch_pool",
             Entry::FillSegments => "fill_segments",
+            Entry::EnclosureProbes => "enclosure_probes",
             Entry::LightMesh | Entry::LightMeshLayers => "light_mesh",
             Entry::Scatter => "scatter",
             Entry::ScanBlocks => "scan_blocks",
@@ -196,15 +200,25 @@ const LIGHT_MESH_COVERAGE: [&str; 8] = [
     FAINT,
     include_str!("shaders/light_mesh_coverage.wgsl"),
 ];
+/// A level's bricks, which its fill and its enclosure probes write.
+const LEVEL_BRICKS: &str = include_str!("shaders/level_bricks.wgsl");
 /// The fill's segments, traced as formula (1)'s are.
-const FILL_SEGMENTS: [&str; 7] = [
+const FILL_SEGMENTS: [&str; 8] = [
     VECTOR,
     SURFACE_POINT,
     SCHLICK,
     OMEGA,
     FORMULA_ONE,
     LATTICE,
+    LEVEL_BRICKS,
     include_str!("shaders/fill_segments.wgsl"),
+];
+/// LMM1's enclosure probes.
+const ENCLOSURE_PROBES: [&str; 4] = [
+    VECTOR,
+    LATTICE,
+    LEVEL_BRICKS,
+    include_str!("shaders/enclosure_probes.wgsl"),
 ];
 /// Formula (2), which falls back to formula (1).
 const LIGHT_MESH: [&str; 8] = [
@@ -259,6 +273,7 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
         ),
         Entry::PatchPool => (&[], &[include_str!("shaders/patch_pool.wgsl")]),
         Entry::FillSegments => (&TRACING, &FILL_SEGMENTS),
+        Entry::EnclosureProbes => (&TRACING, &ENCLOSURE_PROBES),
         Entry::LightMesh | Entry::LightMeshLayers => (&TRACING, &LIGHT_MESH),
         Entry::Scatter => (
             &[],
@@ -344,31 +359,48 @@ mod tests {
         }
     }
 
+    /// The f32 vectors of the WGSL array that `shader` declares with
+    /// `declaration` (up to its opening parenthesis), as bits.
+    fn array_bits(shader: &str, declaration: &str) -> Vec<Vec<u32>> {
+        let list = shader
+            .split_once(declaration)
+            .and_then(|(_, rest)| rest.split_once(");"))
+            .unwrap_or_else(|| panic!("no {declaration}"))
+            .0;
+        (list.split("<f32>(").skip(1))
+            .map(|vector| {
+                let components = vector.split_once(')').expect("a vector's )").0;
+                (components.split(','))
+                    .map(|x| x.trim().parse::<f32>().expect("an f32").to_bits())
+                    .collect()
+            })
+            .collect()
+    }
+
     /// The shader's lamp disk is the CPU's, point for point and bit for
     /// bit: both backends ask the same level nodes.
     #[test]
     fn the_shader_samples_the_lamp_disk_at_the_cpus_points() {
         use crate::lightmesh::lamp_disk::DISK;
         let shader = include_str!("shaders/light_mesh.wgsl");
-        let list = shader
-            .split_once("const DISK = array<vec2<f32>, DISK_SAMPLES>(")
-            .and_then(|(_, rest)| rest.split_once(");"))
-            .expect("light_mesh.wgsl's DISK")
-            .0;
-        let points: Vec<(f32, f32)> = (list.split("vec2<f32>(").skip(1))
-            .map(|point| {
-                let (x, rest) = point.split_once(',').expect("x, y");
-                let y = rest.split_once(')').expect("y)").0;
-                (x.trim().parse().expect("x"), y.trim().parse().expect("y"))
-            })
+        let points = array_bits(shader, "const DISK = array<vec2<f32>, DISK_SAMPLES>(");
+        let cpu: Vec<Vec<u32>> = (DISK.iter())
+            .map(|&(x, y)| vec![x.to_bits(), y.to_bits()])
             .collect();
-        let bits = |points: &[(f32, f32)]| -> Vec<(u32, u32)> {
-            points
-                .iter()
-                .map(|&(x, y)| (x.to_bits(), y.to_bits()))
-                .collect()
-        };
-        assert_eq!(bits(&points), bits(&DISK));
+        assert_eq!(points, cpu);
+    }
+
+    /// The GPU's enclosure probes go in the CPU's directions, in its
+    /// order, bit for bit: both backends settle the same flags.
+    #[test]
+    fn the_shader_probes_in_the_cpus_directions() {
+        use crate::lightmesh::enclosure::PROBES;
+        let shader = include_str!("shaders/enclosure_probes.wgsl");
+        let directions = array_bits(shader, "const PROBES = array<vec3<f32>, PROBE_COUNT>(");
+        let cpu: Vec<Vec<u32>> = (PROBES.iter())
+            .map(|direction| direction.to_array().map(f32::to_bits).to_vec())
+            .collect();
+        assert_eq!(directions, cpu);
     }
 
     /// The WGSL structs have the sizes of the Rust records uploaded into
@@ -466,7 +498,7 @@ mod tests {
                 vec![0, 12, 16, 28],
             ),
             ("FillSegment", size_of::<FillSegment>(), vec![0, 4]),
-            ("FillHeader", size_of::<FillHeader>(), vec![0, 12, 16]),
+            ("FillHeader", size_of::<FillHeader>(), vec![0, 12, 16, 20]),
             ("FillBrick", size_of::<FillBrick>(), vec![0, 12]),
             (
                 "MeshHeader",

@@ -20,27 +20,7 @@ struct FillSegment {
     light_flags: u32,
 }
 
-// The lattice, and the u32 light words of a node in the pool.
-struct FillHeader {
-    origin: vec3<f32>,
-    h: f32,
-    light_words: u32,
-}
-
-// A brick of the fill: its coordinates, and the pool's word where its
-// slot starts.
-struct FillBrick {
-    brick: array<i32, 3>,
-    slot_start: u32,
-}
-
-struct FillTable {
-    header: FillHeader,
-    bricks: array<FillBrick>,
-}
-
 @group(0) @binding(ITEMS) var<storage, read> segments: array<FillSegment>;
-@group(0) @binding(FILL_BRICKS) var<storage, read> table: FillTable;
 // ANSWERS_PER_WORD answers a word, each ANSWER_BITS bits.
 @group(0) @binding(ANSWERS) var<storage, read_write> answers: array<atomic<u32>>;
 // The mask pool's slots (`mask_pool.rs`). Each segment owns its bit, so
@@ -56,8 +36,7 @@ fn fill_segments(@builtin(global_invocation_id) id: vec3<u32>) {
     let segment = segments[index];
     let entry = table.bricks[segment.brick_node >> FILL_NODE_BITS];
     let slot = segment.brick_node & ((1u << FILL_NODE_BITS) - 1u);
-    let brick = vec3<i32>(entry.brick[0], entry.brick[1], entry.brick[2]);
-    let origin = lattice_position(table.header.origin, table.header.h, brick_node(brick, slot));
+    let origin = table_node_position(entry, slot);
     let light_index = segment.light_flags >> FILL_FLAG_BITS;
     let flags = segment.light_flags & ((1u << FILL_FLAG_BITS) - 1u);
     let light = lights[light_index];

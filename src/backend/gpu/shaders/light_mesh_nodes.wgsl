@@ -158,9 +158,9 @@ fn brick_slot(brick: vec3<i32>) -> i32 {
 }
 
 // u32 words of a slot: the nodes' groups, then the enclosure flags
-// (`known`, then `enclosed`, 16 u32 each).
+// (`known`, then `enclosed`, FLAG_WORDS each).
 fn slot_size() -> u32 {
-    return BRICK_NODES * GROUPS * directory.header.light_words + 32u;
+    return BRICK_NODES * GROUPS * directory.header.light_words + 2u * FLAG_WORDS;
 }
 
 // Where one node's mask is in the pool, and whether the node lies inside
@@ -194,7 +194,7 @@ fn node_mask(node: vec3<i32>) -> NodeMask {
     let known = slot_base + BRICK_NODES * GROUPS * words + in_brick / 32u;
     let bit = in_brick % 32u;
     let settled = (pool[known] >> bit & 1u) == 1u;
-    let enclosed = (pool[known + 16u] >> bit & 1u) == 1u;
+    let enclosed = (pool[known + FLAG_WORDS] >> bit & 1u) == 1u;
     return NodeMask(true, slot_base + in_brick * GROUPS * words, settled, enclosed);
 }
 
