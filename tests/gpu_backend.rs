@@ -1445,10 +1445,17 @@ fn gpu_fill_bits_equal_the_cpu_fill() {
         on_gpu.merge_segments(&demand, &fill, &answers, &mut gpu_stats);
         assert_eq!(gpu_stats.bits_computed, cpu_stats.bits_computed);
         match shafts {
-            Shafts::Test => assert!(gpu_stats.fill_shafts > 0 && gpu_stats.fill_segments > 0),
+            Shafts::Test => assert!(
+                gpu_stats.fill_shafts > 0
+                    && gpu_stats.fill_hidden_groups > 0
+                    && gpu_stats.fill_segments > 0,
+                "{gpu_stats:?}"
+            ),
             // A fill for a GPU traces every bit the shafts settled too.
             Shafts::Skip => assert!(
-                gpu_stats.fill_shafts == 0 && gpu_stats.fill_segments > segments_with_shafts,
+                gpu_stats.fill_shafts == 0
+                    && gpu_stats.fill_hidden_groups == 0
+                    && gpu_stats.fill_segments > segments_with_shafts,
                 "{gpu_stats:?}"
             ),
         }

@@ -129,7 +129,7 @@ impl LayerTest<'_> {
                     let occluder = self.world.static_occluder(&ray, remembered);
                     work.remembered += u64::from(occluder.is_some() && occluder == remembered);
                     if let (0, Some(wall), true) = (order, occluder, grouped) {
-                        if self.hides_box(wall, light, min, max) {
+                        if wall_hides_box(self.world, wall, light, (min, max)) {
                             work.hidden_groups += 1;
                             for &member in members {
                                 blocked[member] |= bit;
@@ -147,16 +147,24 @@ impl LayerTest<'_> {
             }
         }
     }
+}
 
-    /// Whether one static triangle hides the box `min..max` from `light`.
-    fn hides_box(&self, wall: StaticTriangle, light: &RenderLight, min: Vec3, max: Vec3) -> bool {
-        let corners: [crate::accel::Ray; 8] = std::array::from_fn(|corner| {
-            let pick = |axis: usize| (corner >> axis) & 1 == 1;
-            let at = Vec3::select(glam::BVec3::new(pick(0), pick(1), pick(2)), max, min);
-            light.shadow_ray(at)
-        });
-        self.world.static_triangle_hides(wall, &corners)
-    }
+/// Whether the static triangle `wall` hides the box `min..max` from
+/// `light`: it crosses the segments from all eight corners to the light,
+/// well inside its edges, so it hides every point of the box (its shadow
+/// volume is convex). The fill's wall test, on either backend's fill.
+pub(super) fn wall_hides_box(
+    world: &World,
+    wall: StaticTriangle,
+    light: &RenderLight,
+    (min, max): (Vec3, Vec3),
+) -> bool {
+    let corners: [crate::accel::Ray; 8] = std::array::from_fn(|corner| {
+        let pick = |axis: usize| (corner >> axis) & 1 == 1;
+        let at = Vec3::select(glam::BVec3::new(pick(0), pick(1), pick(2)), max, min);
+        light.shadow_ray(at)
+    });
+    world.static_triangle_hides(wall, &corners)
 }
 
 impl LightMesh {

@@ -5,8 +5,10 @@
 //! brick are first settled together where the shaft from their box to the
 //! light meets no geometry: every one of them sees it (shafts settle only
 //! "nothing in the way", conservatively, so the bits are those the
-//! segments would give). At 64 lamps on the city that leaves about one
-//! segment in ten. The segments that remain carry both layers' tests,
+//! segments would give). Where the shaft is blocked, the triangle that
+//! blocks the first node's segment (one CPU ray) may hide the group's
+//! whole box from the light, well inside its edges: then none of them
+//! sees it. The segments that remain carry both layers' tests,
 //! since the dynamic test depends on the static one: a node blocked by
 //! static geometry needs no dynamic bit. The tracer tests the static
 //! structure where the static bit is missing, then, where the node is
@@ -26,7 +28,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::demand::{BrickDemand, Demand};
-use super::fill::MIN_SHAFT_NODES;
+use super::fill::{wall_hides_box, MIN_SHAFT_NODES};
 use super::masks::{join, LayerUpdate, BRICK_NODES};
 use super::{LightMesh, LightMeshError, LightMeshStats};
 use crate::accel::shaft::Shaft;
@@ -38,7 +40,8 @@ use crate::render::light::RenderLight;
 /// by shafts before making their segments.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Shafts {
-    /// Test a shaft per light and brick; a clear one settles its nodes.
+    /// Test a shaft per light and brick; a clear one settles its nodes,
+    /// and so does a wall that hides their box from the light.
     Test,
     /// Make a segment for every missing bit.
     Skip,
@@ -132,17 +135,31 @@ impl From<&Segment> for Place {
 pub struct SegmentFill {
     bricks: Vec<BrickFill>,
     shafts: u64,
+    hidden_groups: u64,
 }
 
 /// One brick's part of a [`SegmentFill`].
 #[derive(Clone, Debug, Default)]
 struct BrickFill {
     segments: Vec<Segment>,
-    /// Static bits a clear shaft settled visible, and dynamic bits one
-    /// settled unblocked.
+    /// Static bits a clear shaft settled visible, static bits a wall
+    /// settled blocked, and dynamic bits a clear shaft settled unblocked.
     static_clear: Vec<Place>,
+    static_hidden: Vec<Place>,
     dynamic_clear: Vec<Place>,
     shafts: u64,
+    hidden_groups: u64,
+}
+
+/// How the CPU settled a group of a light's missing static bits in a
+/// brick.
+enum Group {
+    /// The shaft from their box to the light meets nothing: all see it.
+    Clear,
+    /// The first node's occluder hides their whole box: none sees it.
+    Hidden,
+    /// Neither: a segment each.
+    Mixed,
 }
 
 impl SegmentFill {
@@ -193,7 +210,12 @@ impl LightMesh {
             .map(|brick| self.brick_segments(brick, demand.words, (lights, world), shafts))
             .collect();
         let shafts = bricks.iter().map(|brick| brick.shafts).sum();
-        Ok(SegmentFill { bricks, shafts })
+        let hidden_groups = bricks.iter().map(|brick| brick.hidden_groups).sum();
+        Ok(SegmentFill {
+            bricks,
+            shafts,
+            hidden_groups,
+        })
     }
 
     fn brick_segments(
@@ -237,22 +259,31 @@ impl LightMesh {
                 slot: slot as u16,
                 light: (word * 64 + bit) as u32,
             };
-            // Static shafts first: a clear one leaves its nodes open.
-            // A clear shaft clears only its own light's bits, so the
-            // groups made before it stand.
+            // Static groups first: a clear shaft leaves its nodes open, a
+            // wall that hides their box closes them. Each settles only
+            // its own light's bits, so the groups made before it stand.
             let static_groups = match shafts {
                 Shafts::Test => holders_by_bit(&bits.test_static),
                 Shafts::Skip => Vec::new(),
             };
             for (bit, members) in static_groups {
-                if fill.shaft_is_clear(&members, &positions, light(bit), |shaft| {
-                    world.shaft_is_clear_static(shaft)
-                }) {
-                    for &slot in &members {
-                        bits.test_static[slot] &= !(1 << bit);
-                        bits.known_visible[slot] |= 1 << bit;
-                        fill.static_clear.push(place(slot, bit));
+                match fill.static_group(&members, &positions, light(bit), world) {
+                    Group::Clear => {
+                        for &slot in &members {
+                            bits.test_static[slot] &= !(1 << bit);
+                            bits.known_visible[slot] |= 1 << bit;
+                            fill.static_clear.push(place(slot, bit));
+                        }
                     }
+                    // Blocked statically: the dynamic bit is not asked.
+                    Group::Hidden => {
+                        for &slot in &members {
+                            bits.test_static[slot] &= !(1 << bit);
+                            bits.test_dynamic[slot] &= !(1 << bit);
+                            fill.static_hidden.push(place(slot, bit));
+                        }
+                    }
+                    Group::Mixed => {}
                 }
             }
             // Dynamic shafts over the nodes known open; with no dynamic
@@ -341,6 +372,7 @@ impl LightMesh {
             .map(|((brick, demanded), answers)| brick.merge(demanded, answers, words))
             .collect();
         stats.fill_shafts += fill.shafts;
+        stats.fill_hidden_groups += fill.hidden_groups;
         for (demanded, merge) in demand.bricks.iter().zip(merged) {
             stats.fill_segments += merge.segments;
             stats.nodes_computed += merge.nodes_computed;
@@ -415,11 +447,46 @@ impl BrickFill {
             update.static_computed[word] |= bit;
             update.static_visible[word] |= bit;
         }
+        for place in &self.static_hidden {
+            let (word, bit) = place.locate(words);
+            update.static_computed[word] |= bit;
+        }
         for place in &self.dynamic_clear {
             let (word, bit) = place.locate(words);
             update.dynamic_computed[word] |= bit;
         }
         update
+    }
+
+    /// How `members`' missing static bits of `light` settle as a group:
+    /// as the CPU's fill settles them ([`super::fill`]), by a clear shaft,
+    /// or by the wall that blocks the first node's segment hiding the
+    /// group's whole box.
+    fn static_group(
+        &mut self,
+        members: &[usize],
+        positions: &[Vec3],
+        light: &RenderLight,
+        world: &World,
+    ) -> Group {
+        if self.shaft_is_clear(members, positions, light, |shaft| {
+            world.shaft_is_clear_static(shaft)
+        }) {
+            return Group::Clear;
+        }
+        if members.len() < MIN_SHAFT_NODES {
+            return Group::Mixed;
+        }
+        let first = light.shadow_ray(positions[members[0]]);
+        let Some(wall) = world.static_occluder(&first, None) else {
+            return Group::Mixed;
+        };
+        if wall_hides_box(world, wall, light, bounds(members, positions)) {
+            self.hidden_groups += 1;
+            Group::Hidden
+        } else {
+            Group::Mixed
+        }
     }
 
     /// Whether the shaft from `members`' box to `light` is clear by
@@ -438,13 +505,17 @@ impl BrickFill {
         if members.len() < MIN_SHAFT_NODES {
             return false;
         }
-        let (min, max) = (members.iter())
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &i| {
-                (lo.min(positions[i]), hi.max(positions[i]))
-            });
+        let (min, max) = bounds(members, positions);
         self.shafts += 1;
         is_clear(&Shaft::new(min, max, apex))
     }
+}
+
+/// The box of `members`' `positions`.
+fn bounds(members: &[usize], positions: &[Vec3]) -> (Vec3, Vec3) {
+    (members.iter()).fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &i| {
+        (lo.min(positions[i]), hi.max(positions[i]))
+    })
 }
 
 #[cfg(test)]
@@ -581,7 +652,7 @@ mod tests {
         };
         let fill = SegmentFill {
             bricks: vec![brick],
-            shafts: 0,
+            ..SegmentFill::default()
         };
         let answers: Vec<SegmentAnswer> = cases.iter().map(|case| case.2).collect();
         mesh.merge_segments(&demand, &fill, &answers, &mut LightMeshStats::default());
