@@ -120,9 +120,9 @@ impl From<&Segment> for Place {
 }
 
 /// A frame's fill: per demanded brick (in the demand's order), the bits
-/// shafts settled and the segments left for the tracer. Kept brick by
-/// brick, so that the tracer's records are made and the answers merged
-/// in parallel, without one list of every segment in between (tens of
+/// shafts and walls settled and the segments left for the tracer. Kept
+/// brick by brick, so that the tracer's records are made and the answers
+/// merged in parallel, without one list of every segment in between (tens of
 /// millions on a cold frame of many lamps).
 ///
 /// A brick's segments go light by light, each light's in slot order, so
@@ -326,10 +326,11 @@ impl LightMesh {
         fill
     }
 
-    /// Records the bits `fill`'s shafts settled, and makes every brick
-    /// with segments in the store, ahead of the tracer's answers: a tracer
-    /// that writes the masks in place (the GPU's pool) needs each brick it
-    /// writes to have its slot, holding the shafts' bits, before it runs.
+    /// Records the bits `fill`'s shafts and walls settled, and makes
+    /// every brick with segments in the store, ahead of the tracer's
+    /// answers: a tracer that writes the masks in place (the GPU's pool)
+    /// needs each brick it writes to have its slot, holding those bits,
+    /// before it runs.
     /// [`LightMesh::merge_segments`] records those bits again with the
     /// answers, which leaves them as they are.
     pub fn settle_shafts(&mut self, demand: &Demand, fill: &SegmentFill) {
@@ -439,7 +440,8 @@ impl BrickFill {
 }
 
 impl BrickFill {
-    /// The brick's update from its clear shafts alone.
+    /// The brick's update from its groups alone: clear shafts and hiding
+    /// walls.
     fn shaft_update(&self, words: usize) -> LayerUpdate {
         let mut update = LayerUpdate::zeroed(BRICK_NODES * words);
         for place in &self.static_clear {
