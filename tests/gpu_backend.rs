@@ -1451,7 +1451,8 @@ fn gpu_fill_bits_equal_the_cpu_fill() {
                     && gpu_stats.fill_segments > 0,
                 "{gpu_stats:?}"
             ),
-            // A fill for a GPU traces every bit the shafts settled too.
+            // A fill for a GPU traces every bit the shafts and walls
+            // settled too.
             Shafts::Skip => assert!(
                 gpu_stats.fill_shafts == 0
                     && gpu_stats.fill_hidden_groups == 0

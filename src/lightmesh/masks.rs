@@ -23,11 +23,12 @@
 //!   static bits an earlier run computed;
 //! - the fill sets the bits the frame demanded: on the CPU
 //!   (`super::fill`), or for the GPU's fill (`super::segments`) in two
-//!   steps, the shafts' bits before the GPU traces the rest (with the
-//!   bricks it will write made, [`MaskStore::hold`]) and the GPU's answers
-//!   when they come back;
-//! - LMM1's enclosure stage (`super::enclosure`) sets enclosure flags,
-//!   never a visibility bit.
+//!   steps, the bits its shafts and walls settle before the GPU traces
+//!   the rest (with the bricks it will write made, [`MaskStore::hold`])
+//!   and the GPU's answers when they come back;
+//! - LMM1's enclosure stage (`super::enclosure`: the CPU's probes, or the
+//!   GPU's merged when they come back) sets enclosure flags, never a
+//!   visibility bit.
 //!
 //! A bit set by any of them has the value the fill would compute, which
 //! is what keeps reuse exact. The GPU's mask pool mirrors the store; the

@@ -122,8 +122,8 @@ impl From<&Segment> for Place {
 /// A frame's fill: per demanded brick (in the demand's order), the bits
 /// shafts and walls settled and the segments left for the tracer. Kept
 /// brick by brick, so that the tracer's records are made and the answers
-/// merged in parallel, without one list of every segment in between (tens of
-/// millions on a cold frame of many lamps).
+/// merged in parallel, without one list of every segment in between
+/// (tens of millions on a cold frame of many lamps).
 ///
 /// A brick's segments go light by light, each light's in slot order, so
 /// that neighbouring threads of the tracer (a row of the brick's nodes)
@@ -196,8 +196,8 @@ struct WordBits {
 impl LightMesh {
     /// The fill of `demand`'s missing bits: groups settled by shafts
     /// where `shafts` says so, and a segment for each bit left, in brick,
-    /// light and node order (see [`SegmentFill`]). Refuses (before allocating) when the masks
-    /// would outgrow the memory limit.
+    /// light and node order (see [`SegmentFill`]). Refuses (before
+    /// allocating) when the masks would outgrow the memory limit.
     pub fn fill_segments(
         &self,
         demand: &Demand,
@@ -333,10 +333,10 @@ impl LightMesh {
     /// before it runs.
     /// [`LightMesh::merge_segments`] records those bits again with the
     /// answers, which leaves them as they are.
-    pub fn settle_shafts(&mut self, demand: &Demand, fill: &SegmentFill) {
+    pub fn settle_groups(&mut self, demand: &Demand, fill: &SegmentFill) {
         let words = demand.words;
         let updates: Vec<LayerUpdate> = (fill.bricks.par_iter())
-            .map(|brick| brick.shaft_update(words))
+            .map(|brick| brick.group_update(words))
             .collect();
         for ((demanded, brick), update) in demand.bricks.iter().zip(&fill.bricks).zip(updates) {
             self.masks.merge_brick(demanded.brick, &update);
@@ -346,7 +346,7 @@ impl LightMesh {
         }
     }
 
-    /// Records the shafts' bits and the tracer's `answers` (parallel to
+    /// Records the groups' bits and the tracer's `answers` (parallel to
     /// the segments) in the masks, and what the fill did in `stats`, as
     /// [`LightMesh::fill`] records its own. The bricks' updates are made
     /// in parallel, then merged in the demand's order.
@@ -400,7 +400,7 @@ impl BrickFill {
     /// The brick's update from its shafts and `answers` (parallel to its
     /// segments), with `words` light words per node.
     fn merge(&self, demanded: &BrickDemand, answers: &[SegmentAnswer], words: usize) -> BrickMerge {
-        let mut update = self.shaft_update(words);
+        let mut update = self.group_update(words);
         let mut segments = 0;
         for (segment, answer) in self.segments.iter().zip(answers) {
             let (word, bit) = Place::from(segment).locate(words);
@@ -442,7 +442,7 @@ impl BrickFill {
 impl BrickFill {
     /// The brick's update from its groups alone: clear shafts and hiding
     /// walls.
-    fn shaft_update(&self, words: usize) -> LayerUpdate {
+    fn group_update(&self, words: usize) -> LayerUpdate {
         let mut update = LayerUpdate::zeroed(BRICK_NODES * words);
         for place in &self.static_clear {
             let (word, bit) = place.locate(words);
@@ -528,6 +528,18 @@ mod tests {
     use crate::lightmesh::demand::BrickDemand;
     use crate::lightmesh::lattice::Lattice;
 
+    /// A demand of one light word for the brick at the origin's nodes.
+    fn brick_at_the_origin(needed: Vec<u64>) -> Demand {
+        Demand {
+            bricks: vec![BrickDemand {
+                brick: IVec3::ZERO,
+                needed: needed.into(),
+            }],
+            words: 1,
+            ..Demand::default()
+        }
+    }
+
     /// A brick's segments come light by light, nodes in slot order within
     /// a light, one for each needed bit the store lacks.
     #[test]
@@ -552,14 +564,7 @@ mod tests {
         for (slot, bits) in [(300, 0b10001), (7, 0b00110), (40, 0b10010), (0, 0b00100)] {
             needed[slot] = bits;
         }
-        let demand = Demand {
-            bricks: vec![BrickDemand {
-                brick: IVec3::ZERO,
-                needed: needed.into(),
-            }],
-            words: 1,
-            ..Demand::default()
-        };
+        let demand = brick_at_the_origin(needed);
         let world = World::build(&[]);
         let fill = (mesh.fill_segments(&demand, &lights, &world, Shafts::Skip)).unwrap();
         let order: Vec<(u32, u16)> = (fill.bricks[0].segments.iter())
@@ -644,14 +649,7 @@ mod tests {
             });
         }
         mesh.masks.merge_brick(IVec3::ZERO, &prior_bits);
-        let demand = Demand {
-            bricks: vec![BrickDemand {
-                brick: IVec3::ZERO,
-                needed: needed.into(),
-            }],
-            words: 1,
-            ..Demand::default()
-        };
+        let demand = brick_at_the_origin(needed);
         let fill = SegmentFill {
             bricks: vec![brick],
             ..SegmentFill::default()

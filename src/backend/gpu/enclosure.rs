@@ -17,8 +17,8 @@
 use glam::IVec3;
 
 use super::context::{GpuContext, GpuError};
-use super::contract::{FILL_BRICKS, FILL_NODE_BITS, ITEMS, POOL};
-use super::fill::FillTable;
+use super::contract::{FILL_BRICKS, ITEMS, POOL};
+use super::fill::{table_node, FillTable};
 use super::pass::{answer_buffer, Dispatch, WorldPass, WorldUse, BATCH};
 use super::recording::{Downloaded, Downloads, Part, PendingWords, Recording};
 use super::scene::{storage, GpuScene};
@@ -77,7 +77,7 @@ impl ProbePass {
         probes: &ProbeList,
     ) -> Result<ProbeAnswers, GpuError> {
         let nodes: Vec<u32> = (probes.nodes())
-            .map(|(brick, slot)| (brick as u32) << FILL_NODE_BITS | u32::from(slot))
+            .map(|(brick, slot)| table_node(brick, slot))
             .collect();
         let mut answers = ProbeAnswers {
             count: nodes.len(),

@@ -46,9 +46,8 @@ impl FillSegment {
     pub fn new(brick: usize, segment: &Segment) -> FillSegment {
         let flag = |on: bool, flag: u32| if on { flag } else { 0 };
         debug_assert!(segment.light < u32::MAX >> FILL_FLAG_BITS);
-        debug_assert!(brick < (u32::MAX >> FILL_NODE_BITS) as usize);
         FillSegment {
-            brick_node: (brick as u32) << FILL_NODE_BITS | segment.node as u32,
+            brick_node: table_node(brick, segment.node),
             light_flags: segment.light << FILL_FLAG_BITS
                 | flag(segment.test_static, TEST_STATIC)
                 | flag(segment.known_visible, KNOWN_VISIBLE)
@@ -56,6 +55,14 @@ impl FillSegment {
                 | flag(segment.known_occluded, KNOWN_OCCLUDED),
         }
     }
+}
+
+/// Node `slot` of the [`FillTable`]'s brick `brick` as the level's passes
+/// take it (`level_bricks.wgsl`'s `table_entry` and `table_slot`): the
+/// brick's index above [`FILL_NODE_BITS`] bits of the slot.
+pub fn table_node(brick: usize, slot: u16) -> u32 {
+    debug_assert!(brick < (u32::MAX >> FILL_NODE_BITS) as usize);
+    (brick as u32) << FILL_NODE_BITS | u32::from(slot)
 }
 
 /// `level_bricks.wgsl`'s `FillHeader`: the lattice, the u32 light words
@@ -172,9 +179,9 @@ impl FillPass {
 
     /// Records the tracing of `fill`'s segments against `scene` with
     /// `lights`, each bit written into `pool`, where `table` (a
-    /// [`FillTable`] uploaded) places the fill's bricks. Waits only between groups of `per_wait` segments
-    /// ([`SEGMENTS_PER_WAIT`] but in tests; a whole number of answer
-    /// words), where there are more; the answers left come back with the
+    /// [`FillTable`] uploaded) places the fill's bricks. Waits only
+    /// between groups of `per_wait` segments ([`SEGMENTS_PER_WAIT`] but in
+    /// tests; a whole number of answer words), where there are more; the answers left come back with the
     /// CPU's next wait.
     #[allow(clippy::too_many_arguments)]
     pub fn record(

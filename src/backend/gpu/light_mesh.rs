@@ -8,15 +8,16 @@
 //! reaching lights and finds those whose every node already holds valid
 //! bits in the pool; only the others come back (copied out by the pass,
 //! with its flags), for the CPU's demand. The bits they miss are settled
-//! by the CPU fill's shafts where those are clear; the pool takes the
-//! words of the bricks edited. The bits left are traced on the GPU
-//! ([`super::fill`]), and LMM1's enclosure probes run beside them
-//! ([`super::enclosure`]; on the CPU, before the fill, where the adapter
-//! is a software one or does not round as the CPU does); both write into
-//! the pool themselves: the level's shading
-//! follows without a wait, and the answers reach the CPU's store at its
-//! next wait (the next level's coverage, or the band's end). So the masks the shader reads are
-//! the CPU backend's bit for bit, and what runs on the GPU is the
+//! by the CPU fill's shafts where those are clear and its walls where
+//! one hides a group; the pool takes the words of the bricks edited. The
+//! bits left are traced on the GPU ([`super::fill`]), and LMM1's
+//! enclosure probes run beside them ([`super::enclosure`]; on the CPU,
+//! before the fill, where the adapter is a software one or does not
+//! round as the CPU does); both write into the pool themselves: the
+//! level's shading follows without a wait, and the answers reach the
+//! CPU's store at its next wait (the next level's coverage, or the
+//! band's end). So the masks the shader reads are the CPU backend's bit
+//! for bit, and what runs on the GPU is the
 //! per-point work: the half-ball, LMM's point-to-node segments, the
 //! counts and Omega, and formula (1) where the set is empty.
 
@@ -133,6 +134,7 @@ struct PendingFill {
 }
 
 /// Where a wait's downloads hold a pending fill's answers.
+#[derive(Default)]
 struct FillParts {
     fill: Vec<Part<u32>>,
     probes: Vec<Part<u32>>,
@@ -216,7 +218,7 @@ impl<'m> LightMeshShading<'m> {
 
         let start = Instant::now();
         let fill = (self.mesh).fill_segments(&demand, &job.frame.lights, job.world, self.shafts)?;
-        self.mesh.settle_shafts(&demand, &fill);
+        self.mesh.settle_groups(&demand, &fill);
         stats.add_stage_time("fill", start.elapsed().as_secs_f64());
 
         let mut probes = None;
@@ -308,10 +310,7 @@ impl<'m> LightMeshShading<'m> {
     /// still on the GPU, to what a wait brings back.
     fn download_fill<'s>(&'s self, downloads: &mut Downloads<'s>) -> FillParts {
         let Some(pending) = self.pending.as_ref() else {
-            return FillParts {
-                fill: Vec::new(),
-                probes: Vec::new(),
-            };
+            return FillParts::default();
         };
         FillParts {
             fill: pending.answers.download(downloads),

@@ -163,7 +163,9 @@ impl GpuBackend {
         progress: impl FnMut(usize, usize),
     ) {
         let context = &self.context;
-        let passes = self.pipelines.needed(context, method, aovs);
+        let passes = self
+            .pipelines
+            .needed(context, (method, self.probe_site), aovs);
         // As many threads as the run's workers (`--threads`); a software
         // adapter compiles on its one queue thread, at a pipeline's first
         // dispatch: more threads would only wait there, and each

@@ -53,11 +53,12 @@ impl Pipelines {
         }
     }
 
-    /// The passes frames by `method` record with `aovs`.
+    /// The passes frames by `method` record with `aovs`, LMM1's enclosure
+    /// probes running at `probe_site`.
     pub fn needed(
         &self,
         context: &GpuContext,
-        method: FrameMethod,
+        (method, probe_site): (FrameMethod, ProbeSite),
         aovs: &[Aov],
     ) -> Vec<&WorldPass> {
         let light_layers = aovs.contains(&Aov::Light);
@@ -90,9 +91,7 @@ impl Pipelines {
             FrameMethod::LightMesh { .. } => {
                 let mesh = &self.light_mesh;
                 passes.extend([&mesh.coverage, &mesh.gather, &mesh.patch, &self.fill.pass]);
-                if !method.tests_point_to_node()
-                    && ProbeSite::for_adapter(context) == ProbeSite::Gpu
-                {
+                if !method.tests_point_to_node() && probe_site == ProbeSite::Gpu {
                     passes.push(&self.probes.pass);
                 }
             }

@@ -11,8 +11,8 @@
 // `answers`, a bit per node, which the CPU merges into its store at its
 // next wait.
 
-// Each node as its brick (its index in `table.bricks`) above
-// FILL_NODE_BITS bits of its slot in the brick.
+// Each node, as `level_bricks.wgsl`'s `table_entry` and `table_slot`
+// read it.
 @group(0) @binding(ITEMS) var<storage, read> nodes: array<u32>;
 @group(0) @binding(ANSWERS) var<storage, read_write> answers: array<atomic<u32>>;
 // The mask pool's slots (`mask_pool.rs`); a slot's flag words are shared
@@ -74,8 +74,8 @@ fn enclosure_probes(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let node = nodes[index];
-    let entry = table.bricks[node >> FILL_NODE_BITS];
-    let slot = node & ((1u << FILL_NODE_BITS) - 1u);
+    let entry = table_entry(node);
+    let slot = table_slot(node);
     let enclosed = is_enclosed(table_node_position(entry, slot), table.header.probe_reach);
     let bit = 1u << (slot % 32u);
     let known = entry.slot_start + BRICK_NODES * GROUPS * table.header.light_words + slot / 32u;

@@ -11,8 +11,8 @@
 // into `answers`, which the CPU merges into its store at its next wait.
 
 struct FillSegment {
-    // The node's brick (its index in `table.bricks`) above FILL_NODE_BITS
-    // bits of its slot in the brick.
+    // The node, as `level_bricks.wgsl`'s `table_entry` and `table_slot`
+    // read it.
     brick_node: u32,
     // The light's index above FILL_FLAG_BITS bits of TEST_STATIC |
     // KNOWN_VISIBLE | TEST_DYNAMIC | KNOWN_OCCLUDED (`contract.rs`); the
@@ -34,8 +34,8 @@ fn fill_segments(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let segment = segments[index];
-    let entry = table.bricks[segment.brick_node >> FILL_NODE_BITS];
-    let slot = segment.brick_node & ((1u << FILL_NODE_BITS) - 1u);
+    let entry = table_entry(segment.brick_node);
+    let slot = table_slot(segment.brick_node);
     let origin = table_node_position(entry, slot);
     let light_index = segment.light_flags >> FILL_FLAG_BITS;
     let flags = segment.light_flags & ((1u << FILL_FLAG_BITS) - 1u);

@@ -25,6 +25,17 @@ struct FillTable {
 
 @group(0) @binding(FILL_BRICKS) var<storage, read> table: FillTable;
 
+// A pass's item naming a node of the table: its brick's index in
+// `table.bricks` above FILL_NODE_BITS bits of its slot in the brick
+// (`fill.rs`'s `table_node`).
+fn table_entry(item: u32) -> FillBrick {
+    return table.bricks[item >> FILL_NODE_BITS];
+}
+
+fn table_slot(item: u32) -> u32 {
+    return item & ((1u << FILL_NODE_BITS) - 1u);
+}
+
 // Where node `slot` of the table's brick `entry` lies, as the CPU places
 // it.
 fn table_node_position(entry: FillBrick, slot: u32) -> vec3<f32> {
