@@ -39,6 +39,8 @@
 use glam::IVec3;
 use rustc_hash::FxHashMap;
 
+use crate::bits::set_bits;
+
 /// Nodes along each edge of a brick.
 pub const BRICK_EDGE: i32 = 8;
 /// Nodes in a brick; a node's slot in its brick is in `0..BRICK_NODES`.
@@ -52,6 +54,10 @@ pub struct MaskStore {
     bricks: FxHashMap<IVec3, Brick>,
     /// Nodes with at least one valid bit, kept as bits are set.
     nodes: usize,
+    /// Per light, the nodes whose bit of it is valid, kept as bits are
+    /// set and cleared: a frame's statistics read them without passing
+    /// over the whole store, which grows with every frame of a fly-through.
+    known: KnownCounts,
     /// Which store this is, and how many edits it has had: a copy of its
     /// bricks elsewhere (the GPU backend's pool) knows by these whether a
     /// brick it holds is still current, without comparing bits.
@@ -67,6 +73,7 @@ impl Clone for MaskStore {
             words: self.words,
             bricks: self.bricks.clone(),
             nodes: self.nodes,
+            known: self.known.clone(),
             id: next_store_id(),
             revision: self.revision,
         }
@@ -200,6 +207,7 @@ impl MaskStore {
             words: lights.div_ceil(64).max(1),
             bricks: FxHashMap::default(),
             nodes: 0,
+            known: KnownCounts::new(lights),
             id: next_store_id(),
             revision: 0,
         }
@@ -226,8 +234,9 @@ impl MaskStore {
         }
     }
 
-    /// `brick`, made if the store has none yet, stamped as edited now.
-    fn edit(&mut self, brick: IVec3) -> &mut Brick {
+    /// `brick`, made if the store has none yet, stamped as edited now, and
+    /// the counts of valid bits its edit must keep.
+    fn edit(&mut self, brick: IVec3) -> (&mut Brick, &mut KnownCounts) {
         self.revision += 1;
         let words = self.words;
         let stored = self
@@ -235,7 +244,7 @@ impl MaskStore {
             .entry(brick)
             .or_insert_with(|| Brick::new(words));
         stored.revision = self.revision;
-        stored
+        (stored, &mut self.known)
     }
 
     /// The lights nL whose bits the store holds.
@@ -312,13 +321,14 @@ impl MaskStore {
 
     fn merge_slot(&mut self, brick: IVec3, slot: usize, update: &LayerUpdate, offset: usize) {
         let words = self.words;
-        let stored = self.edit(brick);
+        let (stored, known) = self.edit(brick);
         let node = &mut stored.nodes[slot * GROUPS * words..(slot + 1) * GROUPS * words];
         let was_empty = node[STATIC_VALID * words..(STATIC_VALID + 1) * words]
             .iter()
             .all(|&valid| valid == 0);
         let mut now_valid = false;
         for word in 0..words {
+            let valid_before = (NodeMask { bits: node, words }).valid(word);
             let at = |group: usize| group * words + word;
             let (computed, value) = (
                 update.static_computed[offset + word],
@@ -335,6 +345,9 @@ impl MaskStore {
             node[at(DYNAMIC_VALID)] |= computed;
             stored.dynamic_lights[word] |= computed;
             now_valid |= node[at(STATIC_VALID)] != 0;
+            let valid_after = (NodeMask { bits: node, words }).valid(word);
+            known.gain(word, valid_after & !valid_before);
+            known.lose(word, valid_before & !valid_after);
         }
         if was_empty && now_valid {
             self.nodes += 1;
@@ -349,24 +362,37 @@ impl MaskStore {
         F: Fn(IVec3, &mut BrickValidity) -> u64 + Send + Sync,
     {
         use rayon::prelude::*;
-        let words = self.words;
+        let (words, lights) = (self.words, self.lights);
         self.revision += 1;
         let revision = self.revision;
-        self.bricks
+        let (cleared, lost) = self
+            .bricks
             .par_iter_mut()
-            .map(|(brick, stored)| {
-                let validity = &mut BrickValidity {
-                    bits: &mut stored.nodes,
-                    dynamic_lights: &mut stored.dynamic_lights,
-                    words,
-                };
-                let cleared = clear(*brick, validity);
-                if cleared > 0 {
-                    stored.revision = revision;
-                }
-                cleared
-            })
-            .sum()
+            .fold(
+                || (0, KnownCounts::new(lights)),
+                |(cleared, mut lost), (brick, stored)| {
+                    let validity = &mut BrickValidity {
+                        bits: &mut stored.nodes,
+                        dynamic_lights: &mut stored.dynamic_lights,
+                        words,
+                        lost: &mut lost,
+                    };
+                    let brick_cleared = clear(*brick, validity);
+                    if brick_cleared > 0 {
+                        stored.revision = revision;
+                    }
+                    (cleared + brick_cleared, lost)
+                },
+            )
+            .reduce(
+                || (0, KnownCounts::new(lights)),
+                |(a, mut lost), (b, other)| {
+                    lost.add(&other);
+                    (a + b, lost)
+                },
+            );
+        self.known.subtract(&lost);
+        cleared
     }
 
     /// The coordinates of every brick held, in no particular order.
@@ -407,40 +433,15 @@ impl MaskStore {
     /// (node, light) pairs whose visibility is known (see
     /// [`NodeMask::valid`]): what the next frame can reuse.
     pub fn known_bits(&self) -> u64 {
-        use rayon::prelude::*;
-        let stride = GROUPS * self.words;
-        self.bricks
-            .par_iter()
-            .flat_map_iter(|(_, stored)| stored.nodes.chunks(stride))
-            .map(|node| {
-                let mask = NodeMask {
-                    bits: node,
-                    words: self.words,
-                };
-                (0..self.words)
-                    .map(|word| mask.valid(word).count_ones() as u64)
-                    .sum::<u64>()
-            })
-            .sum()
+        self.known.per_light.iter().sum()
     }
 
     /// (node, light) pairs whose visibility is known for the lights whose
     /// bits `lights` sets (64 lights a word, as the masks hold them).
     pub fn known_bits_of(&self, lights: &[u64]) -> u64 {
-        use rayon::prelude::*;
-        let stride = GROUPS * self.words;
-        self.bricks
-            .par_iter()
-            .flat_map_iter(|(_, stored)| stored.nodes.chunks(stride))
-            .map(|node| {
-                let mask = NodeMask {
-                    bits: node,
-                    words: self.words,
-                };
-                (lights.iter().enumerate().take(self.words))
-                    .map(|(word, &wanted)| (mask.valid(word) & wanted).count_ones() as u64)
-                    .sum::<u64>()
-            })
+        (lights.iter().enumerate().take(self.words))
+            .flat_map(|(word, &wanted)| set_bits(wanted).map(move |bit| 64 * word + bit))
+            .filter_map(|light| self.known.per_light.get(light))
             .sum()
     }
 
@@ -459,7 +460,7 @@ impl MaskStore {
 
     /// Records the enclosure flags settled for the `known` slots of a brick.
     pub fn merge_enclosure(&mut self, brick: IVec3, settled: &BrickEnclosure) {
-        let stored = &mut self.edit(brick).enclosure;
+        let stored = &mut self.edit(brick).0.enclosure;
         for word in 0..BRICK_WORDS {
             let known = settled.known[word];
             stored.enclosed[word] =
@@ -493,7 +494,7 @@ impl MaskStore {
     /// is left invalid, so the fill stage still tests dynamic objects.
     pub fn import_static(&mut self, brick: IVec3, light: usize, bits: &BrickLightBits) -> u64 {
         let (words, word, bit) = (self.words, light / 64, 1u64 << (light % 64));
-        let stored = self.edit(brick);
+        let (stored, known) = self.edit(brick);
         let (mut imported, mut new_nodes) = (0, 0);
         for (slot, node) in stored.nodes.chunks_mut(GROUPS * words).enumerate() {
             if bits.valid[slot / 64] >> (slot % 64) & 1 == 0
@@ -504,6 +505,7 @@ impl MaskStore {
             let was_empty = node[STATIC_VALID * words..(STATIC_VALID + 1) * words]
                 .iter()
                 .all(|&valid| valid == 0);
+            let valid_before = (NodeMask { bits: node, words }).valid(word);
             let visible = bits.visible[slot / 64] >> (slot % 64) & 1 == 1;
             let at = STATIC_VISIBLE * words + word;
             node[at] = if visible {
@@ -512,6 +514,8 @@ impl MaskStore {
                 node[at] & !bit
             };
             node[STATIC_VALID * words + word] |= bit;
+            let valid_after = (NodeMask { bits: node, words }).valid(word);
+            known.gain(word, valid_after & !valid_before);
             new_nodes += was_empty as usize;
             imported += 1;
         }
@@ -537,6 +541,8 @@ pub struct BrickValidity<'a> {
     bits: &'a mut [u64],
     dynamic_lights: &'a mut [u64],
     words: usize,
+    /// Per light, the valid bits cleared: the store's counts lose them.
+    lost: &'a mut KnownCounts,
 }
 
 impl BrickValidity<'_> {
@@ -549,6 +555,17 @@ impl BrickValidity<'_> {
     /// Where word `word` of `group` of the node at `slot` is.
     fn index(&self, slot: usize, group: usize, word: usize) -> usize {
         (slot * GROUPS + group) * self.words + word
+    }
+
+    /// [`NodeMask::valid`] of the node at `slot`.
+    fn valid(&self, slot: usize, word: usize) -> u64 {
+        let stride = GROUPS * self.words;
+        let bits = &self.bits[slot * stride..(slot + 1) * stride];
+        (NodeMask {
+            bits,
+            words: self.words,
+        })
+        .valid(word)
     }
 
     /// Clears the dynamic-layer validity of light `64·word + bit` at each
@@ -569,7 +586,9 @@ impl BrickValidity<'_> {
                 continue;
             }
             if changed(slot) {
+                let valid_before = self.valid(slot, word);
                 self.bits[at] &= !light;
+                self.lost.gain(word, valid_before & !self.valid(slot, word));
                 cleared += 1;
             } else {
                 kept += 1;
@@ -586,6 +605,7 @@ impl BrickValidity<'_> {
     pub fn clear_lights(&mut self, word: usize, lights: u64) -> u64 {
         let mut cleared = 0;
         for slot in 0..BRICK_NODES {
+            self.lost.gain(word, self.valid(slot, word) & lights);
             for group in [STATIC_VALID, DYNAMIC_VALID] {
                 let at = self.index(slot, group, word);
                 let bits = &mut self.bits[at];
@@ -595,6 +615,46 @@ impl BrickValidity<'_> {
         }
         self.dynamic_lights[word] &= !lights;
         cleared
+    }
+}
+
+/// Per light, how many nodes hold a valid bit of it.
+#[derive(Clone, Debug)]
+struct KnownCounts {
+    per_light: Box<[u64]>,
+}
+
+impl KnownCounts {
+    fn new(lights: usize) -> KnownCounts {
+        KnownCounts {
+            per_light: vec![0; lights].into_boxed_slice(),
+        }
+    }
+
+    /// One more node for each light `64·word + bit` that `bits` sets.
+    fn gain(&mut self, word: usize, bits: u64) {
+        for bit in set_bits(bits) {
+            self.per_light[64 * word + bit] += 1;
+        }
+    }
+
+    /// One node fewer for each light `64·word + bit` that `bits` sets.
+    fn lose(&mut self, word: usize, bits: u64) {
+        for bit in set_bits(bits) {
+            self.per_light[64 * word + bit] -= 1;
+        }
+    }
+
+    fn add(&mut self, other: &KnownCounts) {
+        for (count, more) in self.per_light.iter_mut().zip(&other.per_light) {
+            *count += more;
+        }
+    }
+
+    fn subtract(&mut self, other: &KnownCounts) {
+        for (count, fewer) in self.per_light.iter_mut().zip(&other.per_light) {
+            *count -= fewer;
+        }
     }
 }
 
@@ -848,5 +908,107 @@ mod tests {
             assert_eq!(store.get(*node, 0), Some(index % 2 == 0), "{node}");
         }
         assert_eq!(store.nodes_cached(), nodes.len());
+    }
+}
+
+#[cfg(test)]
+mod known_count_tests {
+    use proptest::prelude::*;
+
+    use super::*;
+
+    /// Per light, the nodes holding a valid bit of it, read from every
+    /// node of the store: what the kept counts must equal.
+    fn recounted(store: &MaskStore) -> Vec<u64> {
+        let mut counts = vec![0; store.lights()];
+        for brick in store.brick_keys().collect::<Vec<_>>() {
+            let bits = store.brick(brick).unwrap();
+            for slot in 0..BRICK_NODES {
+                let mask = store.slot_mask(bits, slot);
+                for (light, count) in counts.iter_mut().enumerate() {
+                    *count += mask.valid(light / 64) >> (light % 64) & 1;
+                }
+            }
+        }
+        counts
+    }
+
+    /// One edit of a store of 70 lights, on nodes of two neighbouring
+    /// bricks.
+    #[derive(Clone, Debug)]
+    enum Edit {
+        Set {
+            node: [i32; 3],
+            light: usize,
+            visible: bool,
+            occluded: Option<bool>,
+        },
+        ClearDynamic {
+            light: usize,
+            slot_parity: usize,
+        },
+        ClearLights {
+            word: usize,
+            lights: u64,
+        },
+        Import {
+            brick: i32,
+            light: usize,
+            valid: u64,
+            visible: u64,
+        },
+    }
+
+    fn edit() -> impl Strategy<Value = Edit> {
+        let light = 0..70usize;
+        prop_oneof![
+            4 => (proptest::array::uniform3(-3..3), light.clone(), any::<bool>(), any::<Option<bool>>())
+                .prop_map(|(node, light, visible, occluded)| Edit::Set { node, light, visible, occluded }),
+            1 => (light.clone(), 0..2usize)
+                .prop_map(|(light, slot_parity)| Edit::ClearDynamic { light, slot_parity }),
+            1 => (0..2usize, any::<u64>()).prop_map(|(word, lights)| Edit::ClearLights { word, lights }),
+            1 => (-1..1, light, any::<u64>(), any::<u64>())
+                .prop_map(|(brick, light, valid, visible)| Edit::Import { brick, light, valid, visible }),
+        ]
+    }
+
+    proptest! {
+        /// Whatever sets or clears bits (the fill's merges, the disk
+        /// cache's import, both kinds of invalidation), the counts the
+        /// store keeps equal a count over every node.
+        #[test]
+        fn kept_counts_equal_a_recount(edits in proptest::collection::vec(edit(), 1..60)) {
+            let mut store = MaskStore::new(70);
+            for edit in edits {
+                match edit {
+                    Edit::Set { node, light, visible, occluded } => {
+                        store.set(IVec3::from(node), light, visible, occluded);
+                    }
+                    Edit::ClearDynamic { light, slot_parity } => {
+                        store.invalidate(|_, validity| {
+                            validity.clear_dynamic_where(light / 64, (light % 64) as u32, |slot| {
+                                slot % 2 == slot_parity
+                            })
+                        });
+                    }
+                    Edit::ClearLights { word, lights } => {
+                        store.invalidate(|_, validity| validity.clear_lights(word, lights));
+                    }
+                    Edit::Import { brick, light, valid, visible } => {
+                        let bits = BrickLightBits {
+                            valid: [valid; BRICK_WORDS],
+                            visible: [visible & valid; BRICK_WORDS],
+                        };
+                        store.import_static(IVec3::splat(brick), light, &bits);
+                    }
+                }
+                let counts = recounted(&store);
+                prop_assert_eq!(&store.known.per_light[..], &counts[..]);
+                prop_assert_eq!(store.known_bits(), counts.iter().sum::<u64>());
+                let odd_lights = [0xaaaa_aaaa_aaaa_aaaa, 0xaaaa_aaaa_aaaa_aaaa];
+                let odd: u64 = counts.iter().skip(1).step_by(2).sum();
+                prop_assert_eq!(store.known_bits_of(&odd_lights), odd);
+            }
+        }
     }
 }
