@@ -19,6 +19,16 @@
 //! only make a point walk, never change what the point gets. Summaries are
 //! made as shading meets tiles, per thread and per frame (nothing is kept
 //! between frames, so cached frames stay equal to cold ones).
+//!
+//! A summary reads the masks of up to 64 tiles' nodes, a hundred times
+//! what one walk reads, so it pays only where many points share a tile.
+//! Seen from above, a street's points are sparse: few share a tile, and
+//! summaries made for every point cost a fly-through's shading more than
+//! the walks they saved (BENCHMARKS.md, "Agreement where points are
+//! dense"). So a tile's summary is made for the
+//! [`POINTS_BEFORE_SUMMARY`]th point a thread meets in it; the ones before
+//! walk. Which points settle then depends on how threads share the frame,
+//! but not what any point gets.
 
 use glam::{IVec3, Vec3};
 use rustc_hash::FxHashMap;
@@ -40,6 +50,12 @@ const _: () = assert!(BRICK_EDGE % TILE_EDGE == 0);
 /// (1) answers instead; the summary cannot tell, so it is not used there.
 const SMALLEST_KI: f32 = 2.0;
 
+/// The points that meet a tile before its summary is made, the last of
+/// them included: 4 keeps a street seen from the pavement as fast as
+/// making every summary at once, and spares a fly-through most of its
+/// summaries.
+const POINTS_BEFORE_SUMMARY: u32 = 4;
+
 /// Tiles summarised per thread before the summaries are dropped and made
 /// again: bounds the memory of a frame's thread.
 const CAPACITY: usize = 1 << 14;
@@ -58,6 +74,8 @@ pub struct Agreement {
     own: Summaries,
     /// The nodes around each tile.
     around: Summaries,
+    /// Tiles points have met whose summary is not made yet, and how many.
+    met: FxHashMap<IVec3, u32>,
 }
 
 impl Agreement {
@@ -74,6 +92,7 @@ impl Agreement {
             usable: reach >= SMALLEST_KI,
             own: Summaries::new(words),
             around: Summaries::new(words),
+            met: FxHashMap::default(),
         }
     }
 
@@ -96,7 +115,9 @@ impl Agreement {
             return false; // too far out for node coordinates
         }
         let tile = cell.as_ivec3() >> TILE_SHIFT;
-        let around = self.around(tile, bricks);
+        let Some(around) = self.around(tile, bricks) else {
+            return false;
+        };
         let summary = self.around.get(around);
         for (word, &asked) in reach.iter().enumerate() {
             let all = summary.seen_by_all(word);
@@ -116,13 +137,23 @@ impl Agreement {
         true
     }
 
-    /// Where the summary of the nodes around `tile` is, made first if need
-    /// be: those of the tiles holding every node a half-ball of a point in
-    /// one of the tile's cells may hold.
-    fn around(&mut self, tile: IVec3, bricks: &mut BrickCache) -> usize {
+    /// Where the summary of the nodes around `tile` is, made first if
+    /// enough points met the tile (None before): those of the tiles
+    /// holding every node a half-ball of a point in one of the tile's cells
+    /// may hold.
+    fn around(&mut self, tile: IVec3, bricks: &mut BrickCache) -> Option<usize> {
         if let Some(at) = self.around.find(tile) {
-            return at;
+            return Some(at);
         }
+        if self.met.len() >= CAPACITY {
+            self.met.clear();
+        }
+        let met = self.met.entry(tile).or_default();
+        *met += 1;
+        if *met < POINTS_BEFORE_SUMMARY {
+            return None;
+        }
+        self.met.remove(&tile);
         if self.around.len() >= CAPACITY || self.own.len() >= CAPACITY {
             self.around.clear();
             self.own.clear();
@@ -138,7 +169,7 @@ impl Agreement {
                 }
             }
         }
-        at
+        Some(at)
     }
 
     /// Where the summary of `tile`'s own nodes is, made first if need be.
@@ -416,6 +447,29 @@ mod tests {
     }
 
     #[test]
+    fn a_tiles_summary_waits_for_points_enough() {
+        let store = store();
+        let lattice = Lattice::new(H);
+        let mut bricks = BrickCache::new(&store);
+        let mut agreement = Agreement::new(lattice, 2.5 * H, 1, store.words());
+        let reach = reach_of(0b0101);
+        // Points a tile apart, as far from the camera: each walks, and no
+        // summary is made.
+        for x in 0..100 {
+            let point = lattice.origin + Vec3::new(0.5 + 4.0 * x as f32, 0.5, 0.5) * H;
+            assert!(!agreement.settle(point, &reach, &mut bricks, &mut [0; 2]));
+        }
+        assert_eq!((agreement.own.len(), agreement.around.len()), (0, 0));
+        // Points enough in the first tile get its summary.
+        let beside = lattice.origin + Vec3::new(1.5, 0.5, 0.5) * H;
+        for _ in 2..POINTS_BEFORE_SUMMARY {
+            assert!(!agreement.settle(beside, &reach, &mut bricks, &mut [0; 2]));
+        }
+        assert!(agreement.settle(beside, &reach, &mut bricks, &mut [0; 2]));
+        assert_eq!(agreement.around.len(), 1);
+    }
+
+    #[test]
     fn summaries_dropped_at_capacity_are_made_again_alike() {
         let store = store();
         let lattice = Lattice::new(H);
@@ -424,14 +478,23 @@ mod tests {
         let far = lattice.origin + Vec3::new(0.5, 0.5, 0.5) * H;
         let reach = reach_of(0b0101);
         let mut first = [0; 2];
+        for _ in 1..POINTS_BEFORE_SUMMARY {
+            assert!(!agreement.settle(far, &reach, &mut bricks, &mut first));
+        }
         assert!(agreement.settle(far, &reach, &mut bricks, &mut first));
         // Fill the caches with tiles of other points until they are dropped.
         for x in 0..CAPACITY as i32 + 1 {
             let elsewhere = lattice.origin + Vec3::new(x as f32 * 4.0, 400.0, 0.0) * H;
-            agreement.settle(elsewhere, &reach, &mut bricks, &mut [0; 2]);
+            for _ in 0..POINTS_BEFORE_SUMMARY {
+                agreement.settle(elsewhere, &reach, &mut bricks, &mut [0; 2]);
+            }
         }
         assert!(agreement.own.len() <= CAPACITY + 64 && agreement.around.len() <= CAPACITY);
+        assert!(agreement.met.len() <= CAPACITY);
         let mut again = [0; 2];
+        for _ in 1..POINTS_BEFORE_SUMMARY {
+            agreement.settle(far, &reach, &mut bricks, &mut again);
+        }
         assert!(agreement.settle(far, &reach, &mut bricks, &mut again));
         assert_eq!(first, again);
         assert_eq!(first, [1, 0]);
@@ -448,6 +511,9 @@ mod tests {
         let mut small = Agreement::new(lattice, 1.9 * H, 1, store.words());
         assert!(!small.settle(inside, &reach, &mut bricks, &mut [0; 2]));
         let mut agreement = Agreement::new(lattice, 2.5 * H, 1, store.words());
+        for _ in 1..POINTS_BEFORE_SUMMARY {
+            agreement.settle(inside, &reach, &mut bricks, &mut [0; 2]);
+        }
         assert!(agreement.settle(inside, &reach, &mut bricks, &mut [0; 2]));
         for beyond in [
             Vec3::splat(1e30),
