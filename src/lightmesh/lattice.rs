@@ -189,9 +189,19 @@ mod tests {
             n in proptest::array::uniform3(-1.0f32..1.0),
             h in 0.05f32..2.0,
             ki in 1.0f32..MAX_KI,
+            on_axes in proptest::bool::ANY,
         ) {
-            let (p, n) = (Vec3::from(p), Vec3::from(n).normalize_or(Vec3::Y));
             let lattice = Lattice::new(h);
+            // Floors and walls: a normal along the axes, and the point on
+            // the lattice's planes through a node, where rows of nodes lie
+            // on the tangent plane itself.
+            let (p, n) = match on_axes {
+                true => (
+                    lattice.node_position(lattice.local(Vec3::from(p)).round().as_ivec3()),
+                    Vec3::from(n).round().normalize_or(Vec3::Y),
+                ),
+                false => (Vec3::from(p), Vec3::from(n).normalize_or(Vec3::Y)),
+            };
             let radius = ki * h;
             let mut nodes = Vec::new();
             lattice.half_ball(p, n, radius, &mut nodes);
