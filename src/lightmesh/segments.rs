@@ -143,7 +143,8 @@ pub struct SegmentFill {
 struct BrickFill {
     segments: Vec<Segment>,
     /// Static bits a clear shaft settled visible, static bits a wall
-    /// settled blocked, and dynamic bits a clear shaft settled unblocked.
+    /// settled blocked (a group's, or the one node whose segment found
+    /// the wall), and dynamic bits a clear shaft settled unblocked.
     static_clear: Vec<Place>,
     static_hidden: Vec<Place>,
     dynamic_clear: Vec<Place>,
@@ -158,6 +159,9 @@ enum Group {
     Clear,
     /// The first node's occluder hides their whole box: none sees it.
     Hidden,
+    /// The first node's segment is blocked, by a wall that does not hide
+    /// the box: the others need a segment each.
+    FirstBlocked,
     /// Neither: a segment each.
     Mixed,
 }
@@ -267,7 +271,8 @@ impl LightMesh {
                 Shafts::Skip => Vec::new(),
             };
             for (bit, members) in static_groups {
-                match fill.static_group(&members, &positions, light(bit), world) {
+                let group = fill.static_group(&members, &positions, light(bit), world);
+                match group {
                     Group::Clear => {
                         for &slot in &members {
                             bits.test_static[slot] &= !(1 << bit);
@@ -276,8 +281,12 @@ impl LightMesh {
                         }
                     }
                     // Blocked statically: the dynamic bit is not asked.
-                    Group::Hidden => {
-                        for &slot in &members {
+                    Group::Hidden | Group::FirstBlocked => {
+                        let blocked = match group {
+                            Group::Hidden => &members[..],
+                            _ => &members[..1],
+                        };
+                        for &slot in blocked {
                             bits.test_static[slot] &= !(1 << bit);
                             bits.test_dynamic[slot] &= !(1 << bit);
                             fill.static_hidden.push(place(slot, bit));
@@ -297,9 +306,12 @@ impl LightMesh {
             };
             for (bit, members) in holders_by_bit(&open_dynamic) {
                 let clear = !world.has_dynamic()
-                    || fill.shaft_is_clear(&members, &positions, light(bit), |shaft| {
-                        world.shaft_is_clear_dynamic(shaft)
-                    });
+                    || (members.len() >= MIN_SHAFT_NODES
+                        && fill.shaft_is_clear(
+                            bounds(&members, &positions),
+                            light(bit),
+                            |shaft| world.shaft_is_clear_dynamic(shaft),
+                        ));
                 if clear {
                     for &slot in &members {
                         bits.test_dynamic[slot] &= !(1 << bit);
@@ -463,7 +475,8 @@ impl BrickFill {
     /// How `members`' missing static bits of `light` settle as a group:
     /// as the CPU's fill settles them ([`super::fill`]), by a clear shaft,
     /// or by the wall that blocks the first node's segment hiding the
-    /// group's whole box.
+    /// group's whole box; where that wall hides less, the first node's
+    /// bit is settled all the same, as the CPU's fill settles it.
     fn static_group(
         &mut self,
         members: &[usize],
@@ -471,43 +484,36 @@ impl BrickFill {
         light: &RenderLight,
         world: &World,
     ) -> Group {
-        if self.shaft_is_clear(members, positions, light, |shaft| {
-            world.shaft_is_clear_static(shaft)
-        }) {
-            return Group::Clear;
-        }
         if members.len() < MIN_SHAFT_NODES {
             return Group::Mixed;
+        }
+        let bounds = bounds(members, positions);
+        if self.shaft_is_clear(bounds, light, |shaft| world.shaft_is_clear_static(shaft)) {
+            return Group::Clear;
         }
         let first = light.shadow_ray(positions[members[0]]);
         let Some(wall) = world.static_occluder(&first, None) else {
             return Group::Mixed;
         };
-        if wall_hides_box(world, wall, light, bounds(members, positions)) {
+        if wall_hides_box(world, wall, light, bounds) {
             self.hidden_groups += 1;
             Group::Hidden
         } else {
-            Group::Mixed
+            Group::FirstBlocked
         }
     }
 
-    /// Whether the shaft from `members`' box to `light` is clear by
-    /// `is_clear`; only groups of [`MIN_SHAFT_NODES`] or more towards a
-    /// light with a position are worth a shaft.
+    /// Whether the shaft from a group's box, `(min, max)`, to `light` is
+    /// clear by `is_clear`; only a light with a position has a shaft.
     fn shaft_is_clear(
         &mut self,
-        members: &[usize],
-        positions: &[Vec3],
+        (min, max): (Vec3, Vec3),
         light: &RenderLight,
         is_clear: impl Fn(&Shaft) -> bool,
     ) -> bool {
         let Some(apex) = light.position() else {
             return false;
         };
-        if members.len() < MIN_SHAFT_NODES {
-            return false;
-        }
-        let (min, max) = bounds(members, positions);
         self.shafts += 1;
         is_clear(&Shaft::new(min, max, apex))
     }
