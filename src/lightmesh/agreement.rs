@@ -20,12 +20,13 @@
 //! made as shading meets tiles, per thread and per frame (nothing is kept
 //! between frames, so cached frames stay equal to cold ones).
 //!
-//! A summary reads the masks of up to 64 tiles' nodes, a hundred times
-//! what one walk reads, so it pays only where many points share a tile.
-//! Seen from above, a street's points are sparse: few share a tile, and
-//! summaries made for every point cost a fly-through's shading more than
-//! the walks they saved (BENCHMARKS.md, "Agreement where points are
-//! dense"). So a tile's summary is made for the
+//! A summary reads the masks of 27 tiles' nodes at the default kI (more
+//! for wider half-balls), a hundred times what one walk reads, so it pays
+//! only where many points share a tile. Seen from above, a street's points
+//! are sparse: few share a tile, and summaries made for every point cost a
+//! fly-through's shading more than the walks they saved (BENCHMARKS.md,
+//! "Frames that reuse masks: a count that grew with the store, summaries
+//! where points are sparse"). So a tile's summary is made for the
 //! [`POINTS_BEFORE_SUMMARY`]th point a thread meets in it; the ones before
 //! walk. Which points settle then depends on how threads share the frame,
 //! but not what any point gets.
