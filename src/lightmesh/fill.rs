@@ -101,11 +101,7 @@ impl LayerTest<'_> {
         blocked: &mut [u64],
         work: &mut FillWork,
     ) {
-        let (min, max) = members
-            .iter()
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &i| {
-                (lo.min(positions[i]), hi.max(positions[i]))
-            });
+        let (min, max) = group_box(members, positions);
         let grouped = members.len() >= MIN_SHAFT_NODES;
         if let (Some(apex), true) = (light.position(), grouped) {
             work.shafts += 1;
@@ -147,6 +143,14 @@ impl LayerTest<'_> {
             }
         }
     }
+}
+
+/// The box of `members`' `positions`: the base of a group's shaft, and
+/// what its wall must hide.
+pub(super) fn group_box(members: &[usize], positions: &[Vec3]) -> (Vec3, Vec3) {
+    (members.iter()).fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &i| {
+        (lo.min(positions[i]), hi.max(positions[i]))
+    })
 }
 
 /// Whether the static triangle `wall` hides the box `min..max` from

@@ -138,7 +138,16 @@ pub struct NodeMask<'a> {
     words: usize,
 }
 
-impl NodeMask<'_> {
+impl<'a> NodeMask<'a> {
+    /// The mask of `slot` within a brick's bits.
+    fn of_slot(bits: &'a [u64], slot: usize, words: usize) -> NodeMask<'a> {
+        let stride = GROUPS * words;
+        NodeMask {
+            bits: &bits[slot * stride..(slot + 1) * stride],
+            words,
+        }
+    }
+
     fn group(&self, group: usize, word: usize) -> u64 {
         self.bits[group * self.words + word]
     }
@@ -271,11 +280,7 @@ impl MaskStore {
 
     /// The mask of `slot` within a brick's bits.
     pub fn slot_mask<'a>(&self, bits: &'a [u64], slot: usize) -> NodeMask<'a> {
-        let stride = GROUPS * self.words;
-        NodeMask {
-            bits: &bits[slot * stride..(slot + 1) * stride],
-            words: self.words,
-        }
+        NodeMask::of_slot(bits, slot, self.words)
     }
 
     /// V(light, node) if it is known.
@@ -559,13 +564,7 @@ impl BrickValidity<'_> {
 
     /// [`NodeMask::valid`] of the node at `slot`.
     fn valid(&self, slot: usize, word: usize) -> u64 {
-        let stride = GROUPS * self.words;
-        let bits = &self.bits[slot * stride..(slot + 1) * stride];
-        (NodeMask {
-            bits,
-            words: self.words,
-        })
-        .valid(word)
+        NodeMask::of_slot(self.bits, slot, self.words).valid(word)
     }
 
     /// Clears the dynamic-layer validity of light `64·word + bit` at each

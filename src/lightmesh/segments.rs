@@ -28,7 +28,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::demand::{BrickDemand, Demand};
-use super::fill::{wall_hides_box, MIN_SHAFT_NODES};
+use super::fill::{group_box, wall_hides_box, MIN_SHAFT_NODES};
 use super::masks::{join, LayerUpdate, BRICK_NODES};
 use super::{LightMesh, LightMeshError, LightMeshStats};
 use crate::accel::shaft::Shaft;
@@ -271,28 +271,24 @@ impl LightMesh {
                 Shafts::Skip => Vec::new(),
             };
             for (bit, members) in static_groups {
-                let group = fill.static_group(&members, &positions, light(bit), world);
-                match group {
+                let blocked = match fill.static_group(&members, &positions, light(bit), world) {
                     Group::Clear => {
                         for &slot in &members {
                             bits.test_static[slot] &= !(1 << bit);
                             bits.known_visible[slot] |= 1 << bit;
                             fill.static_clear.push(place(slot, bit));
                         }
+                        continue;
                     }
-                    // Blocked statically: the dynamic bit is not asked.
-                    Group::Hidden | Group::FirstBlocked => {
-                        let blocked = match group {
-                            Group::Hidden => &members[..],
-                            _ => &members[..1],
-                        };
-                        for &slot in blocked {
-                            bits.test_static[slot] &= !(1 << bit);
-                            bits.test_dynamic[slot] &= !(1 << bit);
-                            fill.static_hidden.push(place(slot, bit));
-                        }
-                    }
-                    Group::Mixed => {}
+                    Group::Hidden => &members[..],
+                    Group::FirstBlocked => &members[..1],
+                    Group::Mixed => continue,
+                };
+                // Blocked statically: the dynamic bit is not asked.
+                for &slot in blocked {
+                    bits.test_static[slot] &= !(1 << bit);
+                    bits.test_dynamic[slot] &= !(1 << bit);
+                    fill.static_hidden.push(place(slot, bit));
                 }
             }
             // Dynamic shafts over the nodes known open; with no dynamic
@@ -306,12 +302,11 @@ impl LightMesh {
             };
             for (bit, members) in holders_by_bit(&open_dynamic) {
                 let clear = !world.has_dynamic()
-                    || (members.len() >= MIN_SHAFT_NODES
-                        && fill.shaft_is_clear(
-                            bounds(&members, &positions),
-                            light(bit),
-                            |shaft| world.shaft_is_clear_dynamic(shaft),
-                        ));
+                    || shaft_box(&members, &positions).is_some_and(|bounds| {
+                        fill.shaft_is_clear(bounds, light(bit), |shaft| {
+                            world.shaft_is_clear_dynamic(shaft)
+                        })
+                    });
                 if clear {
                     for &slot in &members {
                         bits.test_dynamic[slot] &= !(1 << bit);
@@ -484,10 +479,9 @@ impl BrickFill {
         light: &RenderLight,
         world: &World,
     ) -> Group {
-        if members.len() < MIN_SHAFT_NODES {
+        let Some(bounds) = shaft_box(members, positions) else {
             return Group::Mixed;
-        }
-        let bounds = bounds(members, positions);
+        };
         if self.shaft_is_clear(bounds, light, |shaft| world.shaft_is_clear_static(shaft)) {
             return Group::Clear;
         }
@@ -519,11 +513,10 @@ impl BrickFill {
     }
 }
 
-/// The box of `members`' `positions`.
-fn bounds(members: &[usize], positions: &[Vec3]) -> (Vec3, Vec3) {
-    (members.iter()).fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &i| {
-        (lo.min(positions[i]), hi.max(positions[i]))
-    })
+/// The box of `members`' `positions`, where the group is large enough
+/// to be worth a shaft ([`MIN_SHAFT_NODES`]).
+fn shaft_box(members: &[usize], positions: &[Vec3]) -> Option<(Vec3, Vec3)> {
+    (members.len() >= MIN_SHAFT_NODES).then(|| group_box(members, positions))
 }
 
 #[cfg(test)]
