@@ -209,6 +209,17 @@ fn a_warm_cache_gives_the_same_pixels_for_fewer_bits() {
         0,
         "only the first frame loads"
     );
+
+    // A run whose every static bit came from the file writes nothing: the
+    // file removed after the load stays away.
+    let (_, stats, sequence) = render(&scene, &settings, Some(dir.path()), &TIMES[..1]);
+    assert!(mesh_stats(&stats[0]).bits_loaded > 0);
+    std::fs::remove_file(&files[0]).unwrap();
+    sequence.save_cache().unwrap();
+    assert!(
+        cache_files(dir.path()).is_empty(),
+        "a warm run rewrote the file"
+    );
 }
 
 #[test]

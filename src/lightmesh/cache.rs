@@ -180,23 +180,27 @@ impl StaticMaskCache {
     /// position).
     pub fn from_store(store: &MaskStore, lights: &[RenderLight]) -> StaticMaskCache {
         let mut cache = StaticMaskCache::default();
-        for (index, light) in lights.iter().enumerate() {
-            cache.add_light(store, index, light);
-        }
+        cache.add_lights(store, lights, 0..lights.len());
         cache
     }
 
-    /// ORs in the static bits `store` holds for light `index`, standing at
-    /// `light`'s position.
-    pub fn add_light(&mut self, store: &MaskStore, index: usize, light: &RenderLight) {
-        let mut bricks = store.static_bits_of(index).peekable();
-        if bricks.peek().is_none() {
-            return;
+    /// ORs in the static bits `store` holds for the lights numbered
+    /// `which`, each standing at its position in `lights`.
+    pub fn add_lights(
+        &mut self,
+        store: &MaskStore,
+        lights: &[RenderLight],
+        which: impl IntoIterator<Item = usize>,
+    ) {
+        let mut wanted = vec![0u64; store.words()];
+        for index in which {
+            wanted[index / 64] |= 1 << (index % 64);
         }
-        let section = self.sections.entry(LightKey::of(light)).or_default();
-        for (brick, bits) in bricks {
-            merge_brick(section, brick.to_array(), &bits);
-        }
+        let keys: Vec<LightKey> = lights.iter().map(LightKey::of).collect();
+        store.for_each_static_brick(&wanted, |brick, index, bits| {
+            let section = self.sections.entry(keys[index]).or_default();
+            merge_brick(section, brick.to_array(), bits);
+        });
     }
 
     /// ORs `other` in. Static bits are a function of the key, so two
@@ -208,6 +212,11 @@ impl StaticMaskCache {
                 merge_brick(section, brick, &bits);
             }
         }
+    }
+
+    /// Whether it holds no section.
+    pub fn is_empty(&self) -> bool {
+        self.sections.is_empty()
     }
 
     /// Valid static bits held, over all sections.
@@ -228,16 +237,22 @@ impl StaticMaskCache {
     /// section into `store`, creating at most `max_bricks` bricks in all;
     /// returns the bits imported.
     pub fn import(&self, store: &mut MaskStore, lights: &[RenderLight], max_bricks: usize) -> u64 {
+        // Brick by brick, every light's bits while the brick's nodes are
+        // in the processor's cache (a file holds them light by light).
+        let mut by_brick: Vec<([i32; 3], usize, &BrickLightBits)> = (lights.iter().enumerate())
+            .filter_map(|(index, light)| Some((index, self.sections.get(&LightKey::of(light))?)))
+            .flat_map(|(index, bricks)| {
+                bricks
+                    .iter()
+                    .map(move |(&brick, bits)| (brick, index, bits))
+            })
+            .collect();
+        by_brick.sort_unstable_by_key(|&(brick, index, _)| (brick, index));
         let mut imported = 0;
-        for (index, light) in lights.iter().enumerate() {
-            let Some(bricks) = self.sections.get(&LightKey::of(light)) else {
-                continue;
-            };
-            for (&brick, bits) in bricks {
-                let brick = IVec3::from_array(brick);
-                if store.has_brick(brick) || store.brick_count() < max_bricks {
-                    imported += store.import_static(brick, index, bits);
-                }
+        for (brick, index, bits) in by_brick {
+            let brick = IVec3::from_array(brick);
+            if store.has_brick(brick) || store.brick_count() < max_bricks {
+                imported += store.import_static(brick, index, bits);
             }
         }
         imported
@@ -528,14 +543,15 @@ impl LightMesh {
         lights: &[RenderLight],
         moved: impl IntoIterator<Item = usize>,
     ) {
-        for index in moved {
-            kept.add_light(&self.masks, index, &lights[index]);
-        }
+        kept.add_lights(&self.masks, lights, moved);
     }
 
     /// Saves the static bits of `lights` (at their current positions) and
     /// those `kept` from earlier positions to `dir`, merged with the file
-    /// there.
+    /// there. Where the run found no static bit and kept none, every bit
+    /// the store holds came from that file, and nothing is written: a
+    /// warm run does not rewrite (and first re-read) a file of tens of
+    /// megabytes to add nothing.
     pub fn save_static_masks(
         &self,
         dir: &Path,
@@ -543,6 +559,9 @@ impl LightMesh {
         lights: &[RenderLight],
         kept: &StaticMaskCache,
     ) -> Result<(), OutputError> {
+        if self.masks.static_bits_found() == 0 && kept.is_empty() {
+            return Ok(());
+        }
         let key = CacheKey::new(geometry, &self.lattice);
         let mut cache = StaticMaskCache::from_store(&self.masks, lights);
         cache.merge(kept.clone());

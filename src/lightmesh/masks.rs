@@ -58,6 +58,10 @@ pub struct MaskStore {
     /// set and cleared: a frame's statistics read them without passing
     /// over the whole store, which grows with every frame of a fly-through.
     known: KnownCounts,
+    /// Static bits the fill set valid since the store was made (the disk
+    /// cache's imports not counted): none, and the store holds nothing its
+    /// cache file lacks.
+    static_found: u64,
     /// Which store this is, and how many edits it has had: a copy of its
     /// bricks elsewhere (the GPU backend's pool) knows by these whether a
     /// brick it holds is still current, without comparing bits.
@@ -73,6 +77,7 @@ impl Clone for MaskStore {
             words: self.words,
             bricks: self.bricks.clone(),
             nodes: self.nodes,
+            static_found: self.static_found,
             known: self.known.clone(),
             id: next_store_id(),
             revision: self.revision,
@@ -217,6 +222,7 @@ impl MaskStore {
             bricks: FxHashMap::default(),
             nodes: 0,
             known: KnownCounts::new(lights),
+            static_found: 0,
             id: next_store_id(),
             revision: 0,
         }
@@ -331,7 +337,7 @@ impl MaskStore {
         let was_empty = node[STATIC_VALID * words..(STATIC_VALID + 1) * words]
             .iter()
             .all(|&valid| valid == 0);
-        let mut now_valid = false;
+        let (mut now_valid, mut found) = (false, 0);
         for word in 0..words {
             let valid_before = (NodeMask { bits: node, words }).valid(word);
             let at = |group: usize| group * words + word;
@@ -340,6 +346,7 @@ impl MaskStore {
                 update.static_visible[offset + word],
             );
             node[at(STATIC_VISIBLE)] = (node[at(STATIC_VISIBLE)] & !computed) | (value & computed);
+            found += (computed & !node[at(STATIC_VALID)]).count_ones() as u64;
             node[at(STATIC_VALID)] |= computed;
             let (computed, value) = (
                 update.dynamic_computed[offset + word],
@@ -357,6 +364,7 @@ impl MaskStore {
         if was_empty && now_valid {
             self.nodes += 1;
         }
+        self.static_found += found;
     }
 
     /// Clears validity bits, brick by brick in parallel: `clear` gets each
@@ -435,6 +443,12 @@ impl MaskStore {
             .sum()
     }
 
+    /// Static bits the fill found since the store was made; those the
+    /// disk cache imported are not counted.
+    pub fn static_bits_found(&self) -> u64 {
+        self.static_found
+    }
+
     /// (node, light) pairs whose visibility is known (see
     /// [`NodeMask::valid`]): what the next frame can reuse.
     pub fn known_bits(&self) -> u64 {
@@ -474,24 +488,42 @@ impl MaskStore {
         }
     }
 
-    /// One light's static-layer bits in each brick where it has a valid
-    /// one, for the disk cache.
-    pub fn static_bits_of(
+    /// The static-layer bits of the lights `wanted` sets (64 lights a
+    /// word), brick by brick, as the disk cache keeps them: `visit(brick,
+    /// light, bits)` for each light with a valid bit in the brick. One
+    /// pass over the store serves every light: at 64 lamps a brick takes
+    /// 16 KiB, and a pass per light took a city's save seconds.
+    pub fn for_each_static_brick(
         &self,
-        light: usize,
-    ) -> impl Iterator<Item = (IVec3, BrickLightBits)> + '_ {
-        let (words, word, bit) = (self.words, light / 64, light % 64);
-        let stride = GROUPS * words;
-        self.bricks.iter().filter_map(move |(&brick, stored)| {
-            let mut out = BrickLightBits::default();
-            for (slot, node) in stored.nodes.chunks(stride).enumerate() {
-                let valid = node[STATIC_VALID * words + word] >> bit & 1;
-                let visible = node[STATIC_VISIBLE * words + word] >> bit & 1 & valid;
-                out.valid[slot / 64] |= valid << (slot % 64);
-                out.visible[slot / 64] |= visible << (slot % 64);
+        wanted: &[u64],
+        mut visit: impl FnMut(IVec3, usize, &BrickLightBits),
+    ) {
+        let words = self.words;
+        let mut by_light = vec![BrickLightBits::default(); self.lights];
+        let mut held = vec![0u64; words];
+        for (&brick, stored) in &self.bricks {
+            held.fill(0);
+            for (slot, node) in stored.nodes.chunks(GROUPS * words).enumerate() {
+                let (at, bit) = (slot / 64, 1u64 << (slot % 64));
+                for (word, (held, &wanted)) in held.iter_mut().zip(wanted).enumerate() {
+                    let valid = node[STATIC_VALID * words + word] & wanted;
+                    let visible = node[STATIC_VISIBLE * words + word] & valid;
+                    *held |= valid;
+                    for light in set_bits(valid) {
+                        let bits = &mut by_light[64 * word + light];
+                        bits.valid[at] |= bit;
+                        bits.visible[at] |= (visible >> light & 1) << (slot % 64);
+                    }
+                }
             }
-            out.valid.iter().any(|&w| w != 0).then_some((brick, out))
-        })
+            for (word, &held) in held.iter().enumerate() {
+                for light in set_bits(held) {
+                    let bits = &mut by_light[64 * word + light];
+                    visit(brick, 64 * word + light, bits);
+                    *bits = BrickLightBits::default();
+                }
+            }
+        }
     }
 
     /// Records static bits of `light` loaded from the disk cache, where the
@@ -501,10 +533,11 @@ impl MaskStore {
         let (words, word, bit) = (self.words, light / 64, 1u64 << (light % 64));
         let (stored, known) = self.edit(brick);
         let (mut imported, mut new_nodes) = (0, 0);
-        for (slot, node) in stored.nodes.chunks_mut(GROUPS * words).enumerate() {
-            if bits.valid[slot / 64] >> (slot % 64) & 1 == 0
-                || node[STATIC_VALID * words + word] & bit != 0
-            {
+        let slots = (bits.valid.iter().enumerate())
+            .flat_map(|(at, &valid)| set_bits(valid).map(move |slot| 64 * at + slot));
+        for slot in slots {
+            let node = &mut stored.nodes[slot * GROUPS * words..(slot + 1) * GROUPS * words];
+            if node[STATIC_VALID * words + word] & bit != 0 {
                 continue;
             }
             let was_empty = node[STATIC_VALID * words..(STATIC_VALID + 1) * words]
@@ -971,43 +1004,104 @@ mod known_count_tests {
         ]
     }
 
+    /// Applies `edit` to `store`; returns the static bits it found (a set
+    /// of a static bit that was not valid yet: what `static_bits_found`
+    /// must count).
+    fn apply(store: &mut MaskStore, edit: Edit) -> u64 {
+        match edit {
+            Edit::Set {
+                node,
+                light,
+                visible,
+                occluded,
+            } => {
+                let node = IVec3::from(node);
+                let was_valid = store
+                    .node(node)
+                    .is_some_and(|mask| mask.static_layer(light / 64).1 >> (light % 64) & 1 == 1);
+                store.set(node, light, visible, occluded);
+                return u64::from(!was_valid);
+            }
+            Edit::ClearDynamic { light, slot_parity } => {
+                store.invalidate(|_, validity| {
+                    validity.clear_dynamic_where(light / 64, (light % 64) as u32, |slot| {
+                        slot % 2 == slot_parity
+                    })
+                });
+            }
+            Edit::ClearLights { word, lights } => {
+                store.invalidate(|_, validity| validity.clear_lights(word, lights));
+            }
+            Edit::Import {
+                brick,
+                light,
+                valid,
+                visible,
+            } => {
+                let bits = BrickLightBits {
+                    valid: [valid; BRICK_WORDS],
+                    visible: [visible & valid; BRICK_WORDS],
+                };
+                store.import_static(IVec3::splat(brick), light, &bits);
+            }
+        }
+        0
+    }
+
     proptest! {
         /// Whatever sets or clears bits (the fill's merges, the disk
         /// cache's import, both kinds of invalidation), the counts the
-        /// store keeps equal a count over every node.
+        /// store keeps equal a count over every node, and the static bits
+        /// it found are those the fill's sets made valid.
         #[test]
         fn kept_counts_equal_a_recount(edits in proptest::collection::vec(edit(), 1..60)) {
             let mut store = MaskStore::new(70);
+            let mut found = 0;
             for edit in edits {
-                match edit {
-                    Edit::Set { node, light, visible, occluded } => {
-                        store.set(IVec3::from(node), light, visible, occluded);
-                    }
-                    Edit::ClearDynamic { light, slot_parity } => {
-                        store.invalidate(|_, validity| {
-                            validity.clear_dynamic_where(light / 64, (light % 64) as u32, |slot| {
-                                slot % 2 == slot_parity
-                            })
-                        });
-                    }
-                    Edit::ClearLights { word, lights } => {
-                        store.invalidate(|_, validity| validity.clear_lights(word, lights));
-                    }
-                    Edit::Import { brick, light, valid, visible } => {
-                        let bits = BrickLightBits {
-                            valid: [valid; BRICK_WORDS],
-                            visible: [visible & valid; BRICK_WORDS],
-                        };
-                        store.import_static(IVec3::splat(brick), light, &bits);
-                    }
-                }
+                found += apply(&mut store, edit);
                 let counts = recounted(&store);
                 prop_assert_eq!(&store.known.per_light[..], &counts[..]);
                 prop_assert_eq!(store.known_bits(), counts.iter().sum::<u64>());
                 let odd_lights = [0xaaaa_aaaa_aaaa_aaaa, 0xaaaa_aaaa_aaaa_aaaa];
                 let odd: u64 = counts.iter().skip(1).step_by(2).sum();
                 prop_assert_eq!(store.known_bits_of(&odd_lights), odd);
+                prop_assert_eq!(store.static_bits_found(), found);
             }
+        }
+
+        /// The one pass over the store that the disk cache saves from
+        /// hands out each wanted light's static bits once per brick that
+        /// holds a valid one, as every node's static layer has them.
+        #[test]
+        fn static_bricks_equal_every_nodes_static_layer(
+            edits in proptest::collection::vec(edit(), 1..60),
+            wanted in proptest::array::uniform2(any::<u64>()),
+        ) {
+            let mut store = MaskStore::new(70);
+            for edit in edits {
+                apply(&mut store, edit);
+            }
+            let mut handed = FxHashMap::default();
+            let mut repeated = false;
+            store.for_each_static_brick(&wanted, |brick, light, bits| {
+                repeated |= handed.insert((brick, light), *bits).is_some();
+            });
+            prop_assert!(!repeated);
+            for brick in store.brick_keys() {
+                let nodes = store.brick(brick).unwrap();
+                for light in 0..70 {
+                    let (word, bit) = (light / 64, light % 64);
+                    let mut expected = BrickLightBits::default();
+                    for slot in 0..BRICK_NODES {
+                        let (visible, valid) = store.slot_mask(nodes, slot).static_layer(word);
+                        expected.valid[slot / 64] |= (valid >> bit & 1) << (slot % 64);
+                        expected.visible[slot / 64] |= ((visible & valid) >> bit & 1) << (slot % 64);
+                    }
+                    let held = wanted[word] >> bit & 1 == 1 && expected.valid != [0; BRICK_WORDS];
+                    prop_assert_eq!(handed.remove(&(brick, light)), held.then_some(expected));
+                }
+            }
+            prop_assert!(handed.is_empty());
         }
     }
 }
