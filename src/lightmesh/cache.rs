@@ -59,6 +59,8 @@ pub const FORMAT_VERSION: u32 = 1;
 const MAGIC: [u8; 8] = *b"LMMASKS\0";
 const HEADER_BYTES: usize = 8 + 4 + 16 + 4 + 8 + 8;
 const BRICK_BYTES: usize = 3 * 4 + 2 * BRICK_WORDS * 8;
+/// A section's bytes before its bricks: kind, position, brick count.
+const SECTION_BYTES: usize = 1 + 3 * 4 + 4;
 /// Brick coordinates beyond this cannot come from a lattice that
 /// [`Lattice::covers`] the scene; a file holding them is not ours.
 const MAX_BRICK_COORDINATE: i32 = (MAX_NODE_COORDINATE as i32) / 8 + 1;
@@ -258,32 +260,39 @@ impl StaticMaskCache {
         imported
     }
 
-    /// The file's bytes for `key`.
+    /// The file's bytes for `key`, in one buffer of the file's size made
+    /// once (a fly-through's file runs to hundreds of megabytes), the
+    /// body's checksum written into the header last.
     pub fn encode(&self, key: CacheKey) -> Vec<u8> {
-        let mut body = Vec::new();
-        for (light, bricks) in &self.sections {
-            body.push(light.directional as u8);
-            for value in light.bits {
-                body.extend_from_slice(&value.to_le_bytes());
-            }
-            body.extend_from_slice(&(bricks.len() as u32).to_le_bytes());
-            for (brick, bits) in bricks {
-                for value in brick {
-                    body.extend_from_slice(&value.to_le_bytes());
-                }
-                for word in bits.valid.iter().chain(&bits.visible) {
-                    body.extend_from_slice(&word.to_le_bytes());
-                }
-            }
-        }
-        let mut bytes = Vec::with_capacity(HEADER_BYTES + body.len());
+        let body_len: usize = (self.sections.values())
+            .map(|bricks| SECTION_BYTES + bricks.len() * BRICK_BYTES)
+            .sum();
+        let mut bytes = Vec::with_capacity(HEADER_BYTES + body_len);
         bytes.extend_from_slice(&MAGIC);
         bytes.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
         bytes.extend_from_slice(&key.0.to_le_bytes());
         bytes.extend_from_slice(&(self.sections.len() as u32).to_le_bytes());
-        bytes.extend_from_slice(&(body.len() as u64).to_le_bytes());
-        bytes.extend_from_slice(&xxh3_64(&body).to_le_bytes());
-        bytes.extend_from_slice(&body);
+        bytes.extend_from_slice(&(body_len as u64).to_le_bytes());
+        let checksum_at = bytes.len();
+        bytes.extend_from_slice(&0u64.to_le_bytes());
+        for (light, bricks) in &self.sections {
+            bytes.push(light.directional as u8);
+            for value in light.bits {
+                bytes.extend_from_slice(&value.to_le_bytes());
+            }
+            bytes.extend_from_slice(&(bricks.len() as u32).to_le_bytes());
+            for (brick, bits) in bricks {
+                for value in brick {
+                    bytes.extend_from_slice(&value.to_le_bytes());
+                }
+                for word in bits.valid.iter().chain(&bits.visible) {
+                    bytes.extend_from_slice(&word.to_le_bytes());
+                }
+            }
+        }
+        debug_assert_eq!(bytes.len(), HEADER_BYTES + body_len);
+        let checksum = xxh3_64(&bytes[HEADER_BYTES..]);
+        bytes[checksum_at..HEADER_BYTES].copy_from_slice(&checksum.to_le_bytes());
         bytes
     }
 
