@@ -536,40 +536,72 @@ impl MaskStore {
         }
     }
 
-    /// Records static bits of `light` loaded from the disk cache, where the
-    /// store has none yet; returns how many became valid. The dynamic layer
-    /// is left invalid, so the fill stage still tests dynamic objects.
-    pub fn import_static(&mut self, brick: IVec3, light: usize, bits: &BrickLightBits) -> u64 {
-        let (words, word, bit) = (self.words, light / 64, 1u64 << (light % 64));
+    /// Records the static bits the disk cache holds for `brick`, each of
+    /// `lights` with its number, where the store has none yet; returns how
+    /// many became valid. The dynamic layer is left invalid, so the fill
+    /// stage still tests dynamic objects. A brick's lights go in together,
+    /// 64 nodes at a time: the lights' words turn into the nodes' words
+    /// by one transpose, as [`Self::for_each_static_brick`] turns them back.
+    pub fn import_static(&mut self, brick: IVec3, lights: &[(usize, &BrickLightBits)]) -> u64 {
+        let words = self.words;
+        let stride = GROUPS * words;
         let (stored, known) = self.edit(brick);
-        let (mut imported, mut new_nodes) = (0, 0);
-        let slots = (bits.valid.iter().enumerate())
-            .flat_map(|(at, &valid)| set_bits(valid).map(move |slot| 64 * at + slot));
-        for slot in slots {
-            let node = &mut stored.nodes[slot * GROUPS * words..(slot + 1) * GROUPS * words];
-            if node[STATIC_VALID * words + word] & bit != 0 {
-                continue;
+        let unset_before = unset_static_slots(&stored.nodes, words);
+        let mut imported = 0;
+        for word in 0..words {
+            let in_word = || lights.iter().filter(move |(light, _)| light / 64 == word);
+            for (at, nodes) in stored.nodes.chunks_mut(64 * stride).enumerate() {
+                let (mut valid, mut visible) = ([0u64; 64], [0u64; 64]);
+                for &(light, bits) in in_word() {
+                    valid[light % 64] = bits.valid[at];
+                    visible[light % 64] = bits.visible[at] & bits.valid[at];
+                }
+                if valid.iter().all(|&slots| slots == 0) {
+                    continue;
+                }
+                transpose64(&mut valid);
+                transpose64(&mut visible);
+                // Per node, the lights whose bit became valid.
+                let mut gained = [0u64; 64];
+                for (slot, node) in nodes.chunks_mut(stride).enumerate() {
+                    let new = valid[slot] & !node[STATIC_VALID * words + word];
+                    if new == 0 {
+                        continue;
+                    }
+                    let valid_before = (NodeMask { bits: node, words }).valid(word);
+                    let at_visible = STATIC_VISIBLE * words + word;
+                    node[at_visible] = (node[at_visible] & !new) | (visible[slot] & new);
+                    node[STATIC_VALID * words + word] |= new;
+                    let valid_after = (NodeMask { bits: node, words }).valid(word);
+                    gained[slot] = valid_after & !valid_before;
+                    imported += u64::from(new.count_ones());
+                }
+                // Per light, the nodes that gained it.
+                transpose64(&mut gained);
+                for (bit, nodes) in gained.iter().enumerate() {
+                    known.gain_nodes(64 * word + bit, nodes.count_ones().into());
+                }
             }
-            let was_empty = node[STATIC_VALID * words..(STATIC_VALID + 1) * words]
-                .iter()
-                .all(|&valid| valid == 0);
-            let valid_before = (NodeMask { bits: node, words }).valid(word);
-            let visible = bits.visible[slot / 64] >> (slot % 64) & 1 == 1;
-            let at = STATIC_VISIBLE * words + word;
-            node[at] = if visible {
-                node[at] | bit
-            } else {
-                node[at] & !bit
-            };
-            node[STATIC_VALID * words + word] |= bit;
-            let valid_after = (NodeMask { bits: node, words }).valid(word);
-            known.gain(word, valid_after & !valid_before);
-            new_nodes += was_empty as usize;
-            imported += 1;
         }
-        self.nodes += new_nodes;
+        let unset_after = unset_static_slots(&stored.nodes, words);
+        let new_nodes: u32 = (unset_before.iter().zip(&unset_after))
+            .map(|(before, after)| (before & !after).count_ones())
+            .sum();
+        self.nodes += new_nodes as usize;
         imported
     }
+}
+
+/// The slots of a brick's `nodes` without a valid static bit, a bit each.
+fn unset_static_slots(nodes: &[u64], words: usize) -> [u64; BRICK_WORDS] {
+    let mut unset = [0; BRICK_WORDS];
+    for (slot, node) in nodes.chunks(GROUPS * words).enumerate() {
+        let valid = &node[STATIC_VALID * words..(STATIC_VALID + 1) * words];
+        if valid.iter().all(|&word| word == 0) {
+            unset[slot / 64] |= 1 << (slot % 64);
+        }
+    }
+    unset
 }
 
 /// Words holding one bit per node slot of a brick.
@@ -677,6 +709,13 @@ impl KnownCounts {
     fn gain(&mut self, word: usize, bits: u64) {
         for bit in set_bits(bits) {
             self.per_light[64 * word + bit] += 1;
+        }
+    }
+
+    /// `nodes` more nodes for light `light`.
+    fn gain_nodes(&mut self, light: usize, nodes: u64) {
+        if let Some(count) = self.per_light.get_mut(light) {
+            *count += nodes;
         }
     }
 
@@ -924,7 +963,7 @@ mod tests {
             visible: [0; BRICK_WORDS],
         };
         let before_import = revision(&store, b);
-        store.import_static(split(b).0, 2, &bits);
+        store.import_static(split(b).0, &[(2, &bits)]);
         assert_ne!(revision(&store, b), before_import);
 
         // A copy is another store: its edits cannot pass for the original's.
@@ -1052,7 +1091,22 @@ mod known_count_tests {
                     valid: [valid; BRICK_WORDS],
                     visible: [visible & valid; BRICK_WORDS],
                 };
-                store.import_static(IVec3::splat(brick), light, &bits);
+                let brick = IVec3::splat(brick);
+                let (word, bit) = (light / 64, light % 64);
+                let static_bit = |store: &MaskStore, slot: usize| {
+                    let (visible, valid) = store.node(join(brick, slot))?.static_layer(word);
+                    (valid >> bit & 1 == 1).then_some(visible >> bit & 1 == 1)
+                };
+                let before: Vec<_> = (0..BRICK_NODES)
+                    .map(|slot| static_bit(store, slot))
+                    .collect();
+                store.import_static(brick, &[(light, &bits)]);
+                // A bit the store held stays; the file gives the others.
+                for (slot, before) in before.into_iter().enumerate() {
+                    let in_file =
+                        (valid >> (slot % 64) & 1 == 1).then_some(visible >> (slot % 64) & 1 == 1);
+                    assert_eq!(static_bit(store, slot), before.or(in_file), "slot {slot}");
+                }
             }
         }
         0
