@@ -373,9 +373,7 @@ impl Sequence {
         let job = frame_job(&self.scene, &self.world, placed, settings, &self.shadows);
         let frame = (backend.render(&job, method, light_mesh, stats))
             .map_err(|error| run_error(file, error))?;
-        if let Some(mesh_stats) = &mut stats.lightmesh {
-            mesh_stats.bits_loaded = self.light_mesh.take_bits_loaded();
-        }
+        self.report_cache_load(stats);
         self.last_frame = Some(frame.clone());
         Ok(frame)
     }
@@ -406,10 +404,20 @@ impl Sequence {
         let mesh = prepared_light_mesh(mesh, file, self.scene_radius, placed, settings)?;
         let job = frame_job(&self.scene, &self.world, placed, settings, &self.shadows);
         (backend.warm(&job, mesh, stats)).map_err(|error| run_error(file, error))?;
-        if let Some(mesh_stats) = &mut stats.lightmesh {
-            mesh_stats.bits_loaded = self.light_mesh.take_bits_loaded();
-        }
+        self.report_cache_load(stats);
         Ok(())
+    }
+
+    /// Puts what the disk cache gave the light mesh, if this frame made
+    /// it, into the frame's `stats`: the bits, and the `cache_load` stage.
+    fn report_cache_load(&mut self, stats: &mut FrameStats) {
+        let load = self.light_mesh.take_load();
+        if let Some(mesh_stats) = &mut stats.lightmesh {
+            mesh_stats.bits_loaded = load.bits;
+        }
+        if load.seconds > 0.0 {
+            stats.add_stage_time("cache_load", load.seconds);
+        }
     }
 
     /// Renders the placed frame with every light visible from every point,

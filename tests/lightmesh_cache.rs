@@ -209,6 +209,9 @@ fn a_warm_cache_gives_the_same_pixels_for_fewer_bits() {
         0,
         "only the first frame loads"
     );
+    assert!(warm_stats[0].stages.contains_key("cache_load"));
+    assert!(!warm_stats[1].stages.contains_key("cache_load"));
+    assert!(!cold_stats[0].stages.contains_key("cache_load"));
 
     // A run whose every static bit came from the file writes nothing: the
     // file removed after the load stays away.

@@ -8,7 +8,8 @@
 //! In the frame loop the sequence's light mesh (`persistent`) loads the
 //! file when it is made (the first LMM frame), importing each current
 //! light's bits into the mask store before the first fill, and saves at the
-//! end of the run, merging with whatever another worker wrote meanwhile.
+//! end of the run, merging with whatever another worker wrote meanwhile
+//! (a run that found no static bit of its own writes nothing).
 //! What is saved are the bits for each light where the last frame placed
 //! it and where it stood when the light mesh was made (kept aside when the
 //! light first moved away): the positions a later run of the same or a

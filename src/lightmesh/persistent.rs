@@ -15,6 +15,7 @@
 //! [`PersistentLightMesh::save`].
 
 use std::path::PathBuf;
+use std::time::Instant;
 
 use super::cache::{static_geometry_hash, LightKey, StaticMaskCache};
 use super::invalidate::ChangedRegion;
@@ -26,6 +27,14 @@ use crate::render::light::RenderLight;
 use crate::scene::SceneDesc;
 use crate::settings::LightMeshSettings;
 
+/// What loading the disk cache gave a light mesh, and what it took.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CacheLoad {
+    pub bits: u64,
+    /// Reading, checking and importing the file.
+    pub seconds: f64,
+}
+
 /// A sequence's light mesh, once a frame has made it, with what its disk
 /// cache needs to load and save the static masks.
 pub struct PersistentLightMesh {
@@ -35,8 +44,8 @@ pub struct PersistentLightMesh {
     /// Where the static masks are loaded from and saved to; None (the
     /// default for sequences made in code) uses no disk cache.
     cache_dir: Option<PathBuf>,
-    /// Bits the disk cache gave the light mesh, not yet reported.
-    bits_loaded: u64,
+    /// What the disk cache gave the light mesh, not yet reported.
+    loaded: CacheLoad,
     /// Where each light stood when the light mesh was made, and the static
     /// bits of those positions, kept when the light moved away, to save.
     cache_start: Vec<LightKey>,
@@ -62,7 +71,7 @@ impl PersistentLightMesh {
             mesh: None,
             static_geometry: static_geometry_hash(static_objects),
             cache_dir: None,
-            bits_loaded: 0,
+            loaded: CacheLoad::default(),
             cache_start: Vec::new(),
             cache_kept: StaticMaskCache::default(),
         }
@@ -112,16 +121,21 @@ impl PersistentLightMesh {
         mesh.penumbra = settings.penumbra;
         mesh.faint_parts = super::faint::budget_parts(settings.faint_lamps);
         if let Some(dir) = &self.cache_dir {
-            self.bits_loaded = mesh.load_static_masks(dir, self.static_geometry, lights);
+            let start = Instant::now();
+            let bits = mesh.load_static_masks(dir, self.static_geometry, lights);
+            self.loaded = CacheLoad {
+                bits,
+                seconds: start.elapsed().as_secs_f64(),
+            };
             self.cache_start = lights.iter().map(LightKey::of).collect();
         }
         Ok(self.mesh.insert(mesh))
     }
 
-    /// The bits the disk cache gave the light mesh since the last call:
+    /// What the disk cache gave the light mesh since the last call:
     /// reported with the stats of the frame that made it.
-    pub fn take_bits_loaded(&mut self) -> u64 {
-        std::mem::take(&mut self.bits_loaded)
+    pub fn take_load(&mut self) -> CacheLoad {
+        std::mem::take(&mut self.loaded)
     }
 
     /// Brings the light mesh from the frame whose lights were `before` to
@@ -243,7 +257,7 @@ mod tests {
             0.5
         );
         assert_eq!(kept.get().map(|mesh| mesh.lattice.h), Some(0.5));
-        assert_eq!(kept.take_bits_loaded(), 0);
+        assert_eq!(kept.take_load().bits, 0);
     }
 
     #[test]
