@@ -252,13 +252,13 @@ impl StaticMaskCache {
             .collect();
         by_brick.sort_unstable_by_key(|&(brick, index, _)| (brick, index));
         let mut imported = 0;
-        let mut lights = Vec::new();
+        let mut brick_lights = Vec::new();
         for entries in by_brick.chunk_by(|a, b| a.0 == b.0) {
             let brick = IVec3::from_array(entries[0].0);
             if store.has_brick(brick) || store.brick_count() < max_bricks {
-                lights.clear();
-                lights.extend(entries.iter().map(|&(_, index, bits)| (index, bits)));
-                imported += store.import_static(brick, &lights);
+                brick_lights.clear();
+                brick_lights.extend(entries.iter().map(|&(_, index, bits)| (index, bits)));
+                imported += store.import_static(brick, &brick_lights);
             }
         }
         imported

@@ -547,6 +547,8 @@ impl MaskStore {
         let stride = GROUPS * words;
         let (stored, known) = self.edit(brick);
         let unset_before = unset_static_slots(&stored.nodes, words);
+        // The slots that gained a static bit, a bit each.
+        let mut filled = [0u64; BRICK_WORDS];
         let mut imported = 0;
         for word in 0..words {
             let in_word = || lights.iter().filter(move |(light, _)| light / 64 == word);
@@ -574,18 +576,18 @@ impl MaskStore {
                     node[STATIC_VALID * words + word] |= new;
                     let valid_after = (NodeMask { bits: node, words }).valid(word);
                     gained[slot] = valid_after & !valid_before;
+                    filled[at] |= 1 << slot;
                     imported += u64::from(new.count_ones());
                 }
                 // Per light, the nodes that gained it.
                 transpose64(&mut gained);
-                for (bit, nodes) in gained.iter().enumerate() {
+                for (bit, nodes) in gained.iter().enumerate().filter(|(_, &nodes)| nodes != 0) {
                     known.gain_nodes(64 * word + bit, nodes.count_ones().into());
                 }
             }
         }
-        let unset_after = unset_static_slots(&stored.nodes, words);
-        let new_nodes: u32 = (unset_before.iter().zip(&unset_after))
-            .map(|(before, after)| (before & !after).count_ones())
+        let new_nodes: u32 = (unset_before.iter().zip(&filled))
+            .map(|(unset, filled)| (unset & filled).count_ones())
             .sum();
         self.nodes += new_nodes as usize;
         imported
@@ -714,9 +716,7 @@ impl KnownCounts {
 
     /// `nodes` more nodes for light `light`.
     fn gain_nodes(&mut self, light: usize, nodes: u64) {
-        if let Some(count) = self.per_light.get_mut(light) {
-            *count += nodes;
-        }
+        self.per_light[light] += nodes;
     }
 
     /// One node fewer for each light `64·word + bit` that `bits` sets.
