@@ -35,13 +35,16 @@ use glam::{IVec3, Vec3};
 use rustc_hash::FxHashMap;
 
 use super::lattice::{Lattice, MAX_NODE_COORDINATE};
-use super::masks::{BrickCache, BRICK_EDGE};
+use super::masks::{split, BrickCache, BRICK_EDGE};
 
 /// Nodes along each edge of a tile: a divisor of [`BRICK_EDGE`], so a
 /// tile lies in one brick.
 const TILE_EDGE: i32 = 4;
 const TILE_SHIFT: i32 = TILE_EDGE.trailing_zeros() as i32;
-const _: () = assert!(BRICK_EDGE % TILE_EDGE == 0);
+/// The most mesh steps per step of a summarised lattice (the wide set's):
+/// a tile's nodes then still lie in one brick.
+const MAX_STEPS: i32 = 2;
+const _: () = assert!(BRICK_EDGE % (TILE_EDGE * MAX_STEPS) == 0);
 
 /// The smallest kI for which a half-ball always holds a node of positive
 /// weight: its inner ball of radius r/2 (centred r/2 along the normal)
@@ -84,6 +87,10 @@ impl Agreement {
     /// `steps` mesh steps with the mesh's origin (1: the mesh's own), with
     /// `words` words of light bits.
     pub fn new(lattice: Lattice, radius: f32, steps: i32, words: usize) -> Agreement {
+        assert!(
+            (1..=MAX_STEPS).contains(&steps) && MAX_STEPS % steps == 0,
+            "a tile of {steps}-step nodes would straddle bricks"
+        );
         // In steps, as `Lattice::half_ball` rounds it.
         let reach = radius / lattice.h;
         Agreement {
@@ -174,19 +181,24 @@ impl Agreement {
     }
 
     /// Where the summary of `tile`'s own nodes is, made first if need be.
+    /// They lie in one brick, read with one lookup.
     fn own(&mut self, tile: IVec3, bricks: &mut BrickCache) -> usize {
         if let Some(at) = self.own.find(tile) {
             return at;
         }
         let at = self.own.insert(tile);
-        for z in 0..TILE_EDGE {
-            for y in 0..TILE_EDGE {
-                for x in 0..TILE_EDGE {
-                    let node = (tile * TILE_EDGE + IVec3::new(x, y, z)) * self.steps;
-                    let enclosed = bricks.is_enclosed(node);
-                    let Some(mask) = bricks.mask(node) else {
-                        continue;
-                    };
+        let (brick, first) = split(tile * TILE_EDGE * self.steps);
+        let Some(view) = bricks.view(brick) else {
+            return at;
+        };
+        let step = self.steps as usize;
+        let edge = BRICK_EDGE as usize;
+        for z in 0..TILE_EDGE as usize {
+            for y in 0..TILE_EDGE as usize {
+                let row = first + step * (z * edge + y) * edge;
+                for slot in (row..).step_by(step).take(TILE_EDGE as usize) {
+                    let mask = view.mask(slot);
+                    let enclosed = view.is_enclosed(slot);
                     self.own
                         .add_node(at, enclosed, |word| (mask.visible(word), mask.valid(word)));
                 }

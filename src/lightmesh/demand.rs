@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
 use super::faint::LampTerms;
+use super::lattice::Row;
 use super::masks::{parity, split, BRICK_NODES};
 use super::wide_ball::{self, WideBall};
 use super::{LightMesh, LightMeshError};
@@ -71,8 +72,14 @@ impl BrickTables {
     }
 
     fn table(&mut self, brick: IVec3) -> &mut [u64] {
+        let position = self.position(brick);
+        &mut self.bricks[position].needed
+    }
+
+    /// Where `brick`'s table is in `bricks`, made first if need be.
+    fn position(&mut self, brick: IVec3) -> usize {
         let entry = parity(brick);
-        let position = match self.recent[entry] {
+        match self.recent[entry] {
             Some((recent, position)) if recent == brick => position,
             _ => {
                 let words = self.words;
@@ -87,16 +94,26 @@ impl BrickTables {
                 self.recent[entry] = Some((brick, position));
                 position
             }
-        };
-        &mut self.bricks[position].needed
+        }
     }
 
-    fn need(&mut self, node: IVec3, lights: &[u64]) {
-        let (brick, slot) = split(node);
+    /// Needs `lights` at the nodes of `row`, a row of the lattice whose
+    /// node i is the mesh's i·`steps`: its brick looked up once, and again
+    /// only where the row crosses into the next.
+    fn need_row(&mut self, row: Row, steps: i32, lights: &[u64]) {
         let words = self.words;
-        let table = self.table(brick);
-        for (word, &bits) in lights.iter().enumerate() {
-            table[slot * words + word] |= bits;
+        let mut current: Option<(IVec3, usize)> = None;
+        for node in row.nodes() {
+            let (brick, slot) = split(node * steps);
+            let position = match current {
+                Some((at, position)) if at == brick => position,
+                _ => self.position(brick),
+            };
+            current = Some((brick, position));
+            let needed = &mut self.bricks[position].needed[slot * words..(slot + 1) * words];
+            for (into, &bits) in needed.iter_mut().zip(lights) {
+                *into |= bits;
+            }
         }
     }
 
@@ -115,37 +132,40 @@ impl BrickTables {
 /// walk the very same nodes for the same lights, and the tables only OR,
 /// so asking again would change nothing.
 struct Walk {
-    nodes: Vec<IVec3>,
-    asked: Vec<IVec3>,
+    /// Mesh steps per step of the walk's lattice.
+    steps: i32,
+    rows: Vec<Row>,
+    asked: Vec<Row>,
     lights_asked: Vec<u64>,
 }
 
 impl Walk {
-    fn new(words: usize) -> Walk {
+    fn new(steps: i32, words: usize) -> Walk {
         Walk {
-            nodes: Vec::new(),
+            steps,
+            rows: Vec::new(),
             asked: Vec::new(),
             lights_asked: vec![0; words],
         }
     }
 
-    /// The point's nodes go here.
-    fn start(&mut self) -> &mut Vec<IVec3> {
-        self.nodes.clear();
-        &mut self.nodes
+    /// The point's rows go here.
+    fn start(&mut self) -> &mut Vec<Row> {
+        self.rows.clear();
+        &mut self.rows
     }
 
     /// Needs `lights` at the nodes walked, unless the last walk asked for
     /// them (or more) at the same nodes.
     fn need(&mut self, tables: &mut BrickTables, lights: &[u64]) {
         let asked = |(&light, &asked): (&u64, &u64)| light & !asked == 0;
-        if self.nodes == self.asked && lights.iter().zip(&self.lights_asked).all(asked) {
+        if self.rows == self.asked && lights.iter().zip(&self.lights_asked).all(asked) {
             return;
         }
-        for &node in &self.nodes {
-            tables.need(node, lights);
+        for &row in &self.rows {
+            tables.need_row(row, self.steps, lights);
         }
-        std::mem::swap(&mut self.nodes, &mut self.asked);
+        std::mem::swap(&mut self.rows, &mut self.asked);
         self.lights_asked.copy_from_slice(lights);
     }
 }
@@ -190,8 +210,8 @@ impl LightMesh {
             .try_fold(
                 || BrickTables::new(words),
                 |mut tables, ((chunk, chunk_reach), chunk_faint)| {
-                    let mut half_ball = Walk::new(words);
-                    let mut wide_set = Walk::new(words);
+                    let mut half_ball = Walk::new(1, words);
+                    let mut wide_set = Walk::new(wide_ball::STEPS, words);
                     let mut lamps_reached = vec![0; words];
                     let per_point = chunk_reach.chunks(words).zip(chunk_faint.chunks(words));
                     for (point, (point_reach, point_faint)) in chunk.iter().zip(per_point) {
@@ -199,8 +219,9 @@ impl LightMesh {
                             continue;
                         }
                         let (p, n) = (point.position, point.geometric_normal);
-                        let nodes = half_ball.start();
-                        self.lattice.half_ball(p, n, self.radius(), nodes);
+                        let rows = half_ball.start();
+                        self.lattice
+                            .half_ball_rows(p, n, self.radius(), |row| rows.push(row));
                         half_ball.need(&mut tables, point_reach);
                         let Some(ball) = &wide else {
                             continue;
@@ -214,7 +235,8 @@ impl LightMesh {
                         if lamps_reached.iter().all(|&word| word == 0) {
                             continue;
                         }
-                        ball.nodes(p, n, wide_set.start());
+                        let rows = wide_set.start();
+                        ball.rows(p, n, |row| rows.push(row));
                         wide_set.need(&mut tables, &lamps_reached);
                     }
                     match tables.bricks.len() {
@@ -275,11 +297,12 @@ mod tests {
 
     #[test]
     fn tables_or_the_needs_of_shared_nodes_together() {
+        let node = |first: IVec3| Row { first, lanes: 1 };
         let mut a = BrickTables::new(2);
-        a.need(IVec3::new(1, 2, 3), &[1, 0]);
-        a.need(IVec3::new(-1, 0, 0), &[0, 4]);
+        a.need_row(node(IVec3::new(1, 2, 3)), 1, &[1, 0]);
+        a.need_row(node(IVec3::new(-1, 0, 0)), 1, &[0, 4]);
         let mut b = BrickTables::new(2);
-        b.need(IVec3::new(1, 2, 3), &[2, 8]);
+        b.need_row(node(IVec3::new(1, 2, 3)), 1, &[2, 8]);
         a.absorb(b);
         assert_eq!(a.bricks.len(), 2);
         let (brick, slot) = split(IVec3::new(1, 2, 3));
@@ -287,5 +310,33 @@ mod tests {
         assert_eq!(&table[slot * 2..slot * 2 + 2], &[3, 8]);
         let (brick, slot) = split(IVec3::new(-1, 0, 0));
         assert_eq!(&a.table(brick)[slot * 2..slot * 2 + 2], &[0, 4]);
+    }
+
+    /// A row's nodes land in the slots of their own bricks, for the
+    /// mesh's lattice and the wide set's (every other mesh node), where
+    /// the row crosses from brick to brick, at negative coordinates too.
+    #[test]
+    fn a_row_needs_exactly_its_nodes_across_bricks() {
+        for steps in [1, wide_ball::STEPS] {
+            let row = Row {
+                first: IVec3::new(-5, 7, -9),
+                lanes: 0b1011_0101,
+            };
+            let mut tables = BrickTables::new(1);
+            tables.need_row(row, steps, &[0b110]);
+            let wanted: Vec<IVec3> = row.nodes().map(|node| node * steps).collect();
+            let mut needed = Vec::new();
+            for brick in &tables.bricks {
+                for (slot, &bits) in brick.needed.iter().enumerate() {
+                    if bits != 0 {
+                        assert_eq!(bits, 0b110);
+                        needed.push(crate::lightmesh::masks::join(brick.brick, slot));
+                    }
+                }
+            }
+            needed.sort_by_key(|node| node.x);
+            assert_eq!(needed, wanted, "steps {steps}");
+            assert!(tables.bricks.len() >= 2, "the row crosses a brick");
+        }
     }
 }

@@ -28,6 +28,20 @@ pub(crate) const MAX_SPAN: usize = 2 * MAX_KI as usize + 1;
 /// [`MAX_SPAN`] rounded up to whole rows of eight SIMD lanes.
 const PADDED_SPAN: usize = MAX_SPAN.next_multiple_of(8);
 
+/// Up to eight nodes of a row along x: node `first + (i, 0, 0)` for each
+/// bit i of `lanes`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Row {
+    pub first: IVec3,
+    pub lanes: u8,
+}
+
+impl Row {
+    pub fn nodes(self) -> impl Iterator<Item = IVec3> {
+        set_bits(self.lanes.into()).map(move |lane| self.first + IVec3::new(lane as i32, 0, 0))
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lattice {
     pub origin: Vec3,
@@ -85,6 +99,14 @@ impl Lattice {
     ///
     /// `radius` is at most [`MAX_KI`] steps.
     pub fn half_ball(&self, p: Vec3, n: Vec3, radius: f32, out: &mut Vec<IVec3>) {
+        self.half_ball_rows(p, n, radius, |row| out.extend(row.nodes()));
+    }
+
+    /// [`Lattice::half_ball`]'s nodes a row at a time, in the same order:
+    /// `visit` gets each row along x that holds some. Where a caller
+    /// handles a row as a whole (one brick lookup for its nodes), this
+    /// spares it a list of nodes.
+    pub fn half_ball_rows(&self, p: Vec3, n: Vec3, radius: f32, mut visit: impl FnMut(Row)) {
         let local = self.local(p);
         let reach = radius / self.h;
         assert!(
@@ -133,9 +155,10 @@ impl Lattice {
                 for (block, &(dx2, nx)) in x_lanes[..x_blocks].iter().enumerate() {
                     let inside = (dx2 + dy2 + dz2).simd_le(radius_lanes)
                         & (nx + ny + nz).simd_gt(on_plane_lanes);
-                    for lane in set_bits(inside.to_bitmask().into()) {
-                        let ix = (block * 8 + lane) as i32;
-                        out.push(low + IVec3::new(ix, jy as i32, kz as i32));
+                    let lanes = inside.to_bitmask() as u8;
+                    if lanes != 0 {
+                        let first = low + IVec3::new((block * 8) as i32, jy as i32, kz as i32);
+                        visit(Row { first, lanes });
                     }
                 }
             }

@@ -772,16 +772,22 @@ impl<'a> BrickCache<'a> {
     /// The node's mask, or None when no bit of its brick was ever computed.
     pub fn mask(&mut self, node: IVec3) -> Option<NodeMask<'a>> {
         let (brick, slot) = split(node);
-        let stored = self.brick(brick)?;
-        Some(self.store.slot_mask(&stored.nodes, slot))
+        Some(self.view(brick)?.mask(slot))
     }
 
     /// Whether the node is known to lie inside closed geometry.
     pub fn is_enclosed(&mut self, node: IVec3) -> bool {
         let (brick, slot) = split(node);
-        self.brick(brick).is_some_and(|stored| {
-            let bit = 1 << (slot % 64);
-            stored.enclosure.enclosed[slot / 64] & bit != 0
+        self.view(brick).is_some_and(|view| view.is_enclosed(slot))
+    }
+
+    /// The brick, read slot by slot, or None when no bit of it was ever
+    /// computed: one lookup for any number of its nodes.
+    pub fn view(&mut self, brick: IVec3) -> Option<BrickView<'a>> {
+        let stored = self.brick(brick)?;
+        Some(BrickView {
+            stored,
+            words: self.store.words,
         })
     }
 
@@ -795,6 +801,24 @@ impl<'a> BrickCache<'a> {
                 stored
             }
         }
+    }
+}
+
+/// One stored brick's nodes, by slot ([`split`]).
+#[derive(Clone, Copy)]
+pub struct BrickView<'a> {
+    stored: &'a Brick,
+    words: usize,
+}
+
+impl<'a> BrickView<'a> {
+    pub fn mask(&self, slot: usize) -> NodeMask<'a> {
+        NodeMask::of_slot(&self.stored.nodes, slot, self.words)
+    }
+
+    /// Whether the node in `slot` is known to lie inside closed geometry.
+    pub fn is_enclosed(&self, slot: usize) -> bool {
+        self.stored.enclosure.enclosed[slot / 64] & 1 << (slot % 64) != 0
     }
 }
 

@@ -5,7 +5,7 @@
 
 use glam::{IVec3, Vec3};
 
-use super::lattice::{Lattice, MAX_NODE_COORDINATE};
+use super::lattice::{Lattice, Row, MAX_NODE_COORDINATE};
 use super::LightMesh;
 use crate::render::light::RenderLight;
 
@@ -43,6 +43,12 @@ impl WideBall {
     /// Appends to `out` the mesh nodes of the wide half-ball of the point
     /// at `p` with normal `n`. A wide node's position is its mesh node's to
     /// the bit (2h·i and h·2i round alike: scaling by two is exact).
+    /// The same nodes a row at a time, in coordinates of the wide set's
+    /// lattice: a mesh node is one of them times [`STEPS`].
+    pub fn rows(&self, p: Vec3, n: Vec3, visit: impl FnMut(Row)) {
+        self.lattice.half_ball_rows(p, n, self.radius, visit);
+    }
+
     pub fn nodes(&self, p: Vec3, n: Vec3, out: &mut Vec<IVec3>) {
         let first = out.len();
         self.lattice.half_ball(p, n, self.radius, out);
