@@ -28,10 +28,11 @@
 //! ```text
 //! header  magic "LMMASKS\0" · version u32 · key u128 · sections u32
 //!         · body length u64 · body checksum u64 (XXH3-64 of the body)
-//! body    per section: kind u8 (0 point/spot position, 1 direction)
-//!         · 3 × f32 bits as u32 · bricks u32
-//!         · per brick: brick coordinates 3 × i32
-//!           · valid [u64; 8] · visible [u64; 8] (one bit per node slot)
+//! body    per section, in ascending order of light keys: kind u8
+//!         (0 point/spot position, 1 direction) · 3 × f32 bits as u32
+//!         · bricks u32 · the bricks, in ascending order, each with its
+//!           valid and visible words (one bit per node slot), written as
+//!           `super::brick_codec` says against the section before
 //! ```
 //!
 //! A file that fails any check (magic, version, key, length, checksum,
@@ -47,7 +48,8 @@ use std::time::{Duration, Instant};
 use glam::{Affine3A, IVec3, Vec3};
 use xxhash_rust::xxh3::{xxh3_64, Xxh3};
 
-use super::lattice::{Lattice, MAX_NODE_COORDINATE};
+use super::brick_codec::{self, Bricks, Malformed, Reader};
+use super::lattice::Lattice;
 use super::masks::{BrickLightBits, MaskStore, BRICK_WORDS};
 use super::LightMesh;
 use crate::output::{write_atomically, OutputError};
@@ -55,16 +57,10 @@ use crate::render::light::{LightSource, RenderLight};
 
 /// Bumped whenever the layout or the meaning of a bit changes; it is both
 /// in the header and in the key, so an old file is simply another name.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 
 const MAGIC: [u8; 8] = *b"LMMASKS\0";
 const HEADER_BYTES: usize = 8 + 4 + 16 + 4 + 8 + 8;
-const BRICK_BYTES: usize = 3 * 4 + 2 * BRICK_WORDS * 8;
-/// A section's bytes before its bricks: kind, position, brick count.
-const SECTION_BYTES: usize = 1 + 3 * 4 + 4;
-/// Brick coordinates beyond this cannot come from a lattice that
-/// [`Lattice::covers`] the scene; a file holding them is not ours.
-const MAX_BRICK_COORDINATE: i32 = (MAX_NODE_COORDINATE as i32) / 8 + 1;
 /// A lock file older than this was left by a worker that died while
 /// saving (a save takes well under a second per hundred MB) and is
 /// removed; a saver that still has no lock after twice this writes anyway.
@@ -95,6 +91,12 @@ pub enum CacheError {
 /// geometry.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct CacheKey(pub u128);
+
+impl From<Malformed> for CacheError {
+    fn from(Malformed(what): Malformed) -> CacheError {
+        CacheError::Malformed(what)
+    }
+}
 
 impl CacheKey {
     /// The key of `geometry` (from [`static_geometry_hash`]) on `lattice`.
@@ -175,7 +177,7 @@ impl LightKey {
 /// Static-layer bits by light key and brick: the content of a cache file.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct StaticMaskCache {
-    sections: BTreeMap<LightKey, BTreeMap<[i32; 3], BrickLightBits>>,
+    sections: BTreeMap<LightKey, Bricks>,
 }
 
 impl StaticMaskCache {
@@ -264,39 +266,30 @@ impl StaticMaskCache {
         imported
     }
 
-    /// The file's bytes for `key`, in one buffer of the file's size made
-    /// once (a fly-through's file runs to hundreds of megabytes), the
-    /// body's checksum written into the header last.
+    /// The file's bytes for `key`, the body's length and checksum
+    /// written into the header last.
     pub fn encode(&self, key: CacheKey) -> Vec<u8> {
-        let body_len: usize = (self.sections.values())
-            .map(|bricks| SECTION_BYTES + bricks.len() * BRICK_BYTES)
-            .sum();
-        let mut bytes = Vec::with_capacity(HEADER_BYTES + body_len);
+        let mut bytes = Vec::new();
         bytes.extend_from_slice(&MAGIC);
         bytes.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
         bytes.extend_from_slice(&key.0.to_le_bytes());
         bytes.extend_from_slice(&(self.sections.len() as u32).to_le_bytes());
-        bytes.extend_from_slice(&(body_len as u64).to_le_bytes());
-        let checksum_at = bytes.len();
-        bytes.extend_from_slice(&0u64.to_le_bytes());
+        let length_at = bytes.len();
+        bytes.extend_from_slice(&[0; 16]);
+        let mut previous = None;
         for (light, bricks) in &self.sections {
             bytes.push(light.directional as u8);
             for value in light.bits {
                 bytes.extend_from_slice(&value.to_le_bytes());
             }
             bytes.extend_from_slice(&(bricks.len() as u32).to_le_bytes());
-            for (brick, bits) in bricks {
-                for value in brick {
-                    bytes.extend_from_slice(&value.to_le_bytes());
-                }
-                for word in bits.valid.iter().chain(&bits.visible) {
-                    bytes.extend_from_slice(&word.to_le_bytes());
-                }
-            }
+            brick_codec::encode(bricks, previous, &mut bytes);
+            previous = Some(bricks);
         }
-        debug_assert_eq!(bytes.len(), HEADER_BYTES + body_len);
-        let checksum = xxh3_64(&bytes[HEADER_BYTES..]);
-        bytes[checksum_at..HEADER_BYTES].copy_from_slice(&checksum.to_le_bytes());
+        let body = &bytes[HEADER_BYTES..];
+        let (length, checksum) = (body.len() as u64, xxh3_64(body));
+        bytes[length_at..length_at + 8].copy_from_slice(&length.to_le_bytes());
+        bytes[length_at + 8..HEADER_BYTES].copy_from_slice(&checksum.to_le_bytes());
         bytes
     }
 
@@ -306,7 +299,7 @@ impl StaticMaskCache {
         if bytes.len() < HEADER_BYTES {
             return Err(CacheError::TooShort(bytes.len()));
         }
-        let mut header = Reader { bytes, at: 0 };
+        let mut header = Reader::new(bytes);
         if header.take(8)? != MAGIC {
             return Err(CacheError::Magic);
         }
@@ -332,8 +325,9 @@ impl StaticMaskCache {
             return Err(CacheError::Checksum);
         }
 
-        let mut reader = Reader { bytes: body, at: 0 };
+        let mut reader = Reader::new(body);
         let mut cache = StaticMaskCache::default();
+        let mut previous: Option<LightKey> = None;
         for _ in 0..sections {
             let directional = match reader.u8()? {
                 0 => false,
@@ -344,30 +338,14 @@ impl StaticMaskCache {
                 directional,
                 bits: [reader.u32()?, reader.u32()?, reader.u32()?],
             };
+            if previous.is_some_and(|previous| previous >= light) {
+                return Err(CacheError::Malformed("sections out of order"));
+            }
             let count = reader.u32()? as usize;
-            if count.saturating_mul(BRICK_BYTES) > reader.remaining() {
-                return Err(CacheError::Malformed("more bricks than bytes"));
-            }
-            let section = cache.sections.entry(light).or_default();
-            for _ in 0..count {
-                let brick = [reader.i32()?, reader.i32()?, reader.i32()?];
-                if brick.iter().any(|c| c.abs() > MAX_BRICK_COORDINATE) {
-                    return Err(CacheError::Malformed("brick outside any lattice"));
-                }
-                let mut bits = BrickLightBits::default();
-                for word in bits.valid.iter_mut().chain(&mut bits.visible) {
-                    *word = reader.u64()?;
-                }
-                if bits
-                    .visible
-                    .iter()
-                    .zip(&bits.valid)
-                    .any(|(v, ok)| v & !ok != 0)
-                {
-                    return Err(CacheError::Malformed("a visible bit that is not valid"));
-                }
-                merge_brick(section, brick, &bits);
-            }
+            let before = previous.and_then(|previous| cache.sections.get(&previous));
+            let bricks = brick_codec::decode(&mut reader, count, before)?;
+            cache.sections.insert(light, bricks);
+            previous = Some(light);
         }
         if reader.remaining() != 0 {
             return Err(CacheError::Malformed("bytes after the last section"));
@@ -424,11 +402,7 @@ impl StaticMaskCache {
     }
 }
 
-fn merge_brick(
-    section: &mut BTreeMap<[i32; 3], BrickLightBits>,
-    brick: [i32; 3],
-    bits: &BrickLightBits,
-) {
+fn merge_brick(section: &mut Bricks, brick: [i32; 3], bits: &BrickLightBits) {
     let stored = section.entry(brick).or_default();
     for word in 0..BRICK_WORDS {
         stored.visible[word] |= bits.visible[word];
@@ -486,51 +460,6 @@ impl Drop for SaveLock {
             // A lock that cannot be removed only makes later savers wait.
             let _ = std::fs::remove_file(lock);
         }
-    }
-}
-
-/// Reads little-endian values off a byte slice, failing on truncation.
-struct Reader<'a> {
-    bytes: &'a [u8],
-    at: usize,
-}
-
-impl<'a> Reader<'a> {
-    fn take(&mut self, n: usize) -> Result<&'a [u8], CacheError> {
-        let end = self
-            .at
-            .checked_add(n)
-            .filter(|&end| end <= self.bytes.len())
-            .ok_or(CacheError::Malformed("ends in the middle of a value"))?;
-        let slice = &self.bytes[self.at..end];
-        self.at = end;
-        Ok(slice)
-    }
-
-    fn array<const N: usize>(&mut self) -> Result<[u8; N], CacheError> {
-        let mut array = [0; N];
-        array.copy_from_slice(self.take(N)?);
-        Ok(array)
-    }
-
-    fn remaining(&self) -> usize {
-        self.bytes.len() - self.at
-    }
-
-    fn u8(&mut self) -> Result<u8, CacheError> {
-        Ok(self.take(1)?[0])
-    }
-
-    fn u32(&mut self) -> Result<u32, CacheError> {
-        Ok(u32::from_le_bytes(self.array()?))
-    }
-
-    fn i32(&mut self) -> Result<i32, CacheError> {
-        Ok(i32::from_le_bytes(self.array()?))
-    }
-
-    fn u64(&mut self) -> Result<u64, CacheError> {
-        Ok(u64::from_le_bytes(self.array()?))
     }
 }
 

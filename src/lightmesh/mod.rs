@@ -11,6 +11,7 @@
 //! writes the masks, and when, is in [`masks`].
 
 mod agreement;
+mod brick_codec;
 pub mod cache;
 pub mod demand;
 pub mod enclosure;
