@@ -225,6 +225,43 @@ fn a_warm_cache_gives_the_same_pixels_for_fewer_bits() {
     );
 }
 
+/// LMM1's enclosure flags depend on the static geometry, the lattice and
+/// the probes' reach alone: a warm run takes them from the file and probes
+/// no node its first frame needs, for the same pixels; a run of another kI
+/// (another reach) probes its own.
+#[test]
+fn a_warm_cache_holds_lmm1s_enclosure_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = yard(6.0, false);
+    let mut settings = lmm_settings(0.25);
+    settings.method = Method::Lmm1;
+    let (cold, cold_stats, _) = render(&scene, &settings, None, &TIMES[..1]);
+    assert!(
+        mesh_stats(&cold_stats[0]).nodes_probed > 0,
+        "the yard has enclosed nodes to probe"
+    );
+    let (_, _, sequence) = render(&scene, &settings, Some(dir.path()), &TIMES[..1]);
+    sequence.save_cache().unwrap();
+
+    let (warm, warm_stats, _) = render(&scene, &settings, Some(dir.path()), &TIMES[..1]);
+    assert_eq!(warm, cold, "flags from the file give the same pixels");
+    assert_eq!(mesh_stats(&warm_stats[0]).nodes_probed, 0);
+
+    settings.lightmesh.ki += 0.5;
+    let (wider_cold, wider_cold_stats, _) = render(&scene, &settings, None, &TIMES[..1]);
+    let (wider, wider_stats, _) = render(&scene, &settings, Some(dir.path()), &TIMES[..1]);
+    assert_eq!(wider, wider_cold);
+    assert!(
+        mesh_stats(&wider_stats[0]).bits_loaded > 0,
+        "the bits still serve"
+    );
+    assert_eq!(
+        mesh_stats(&wider_stats[0]).nodes_probed,
+        mesh_stats(&wider_cold_stats[0]).nodes_probed,
+        "flags of another reach are not taken"
+    );
+}
+
 #[test]
 fn another_geometry_or_lattice_uses_another_file() {
     let dir = tempfile::tempdir().unwrap();

@@ -3,7 +3,7 @@
 //! geometry depend only on that geometry, the lattice and the light's
 //! position, so a later run (or another worker rendering another frame
 //! range) can load them instead of tracing them again. The dynamic layer
-//! is never cached.
+//! is never cached; LMM1's enclosure flags are, as said below.
 //!
 //! In the frame loop the sequence's light mesh (`persistent`) loads the
 //! file when it is made (the first LMM frame), importing each current
@@ -33,7 +33,17 @@
 //!         · bricks u32 · the bricks, in ascending order, each with its
 //!           valid and visible words (one bit per node slot), written as
 //!           `super::brick_codec` says against the section before
+//!         then LMM1's enclosure flags: the probes' reach as f32 bits
+//!         · bricks u32 · the bricks, their known and enclosed words
+//!           written as valid and visible ones, against no section
 //! ```
+//!
+//! The enclosure flags (`super::enclosure`) depend on the static geometry,
+//! the lattice and the probes' reach alone, so a run whose reach (kI·h
+//! times `enclosure::REACH_IN_RADII`) is the file's takes them for the
+//! bricks it imported bits into, and its first frame probes only nodes
+//! the file did not have. A change to how probes decide must bump
+//! [`FORMAT_VERSION`].
 //!
 //! A file that fails any check (magic, version, key, length, checksum,
 //! structure) is reported with `log::warn!` and ignored: a wrong static bit
@@ -50,14 +60,14 @@ use xxhash_rust::xxh3::{xxh3_64, Xxh3};
 
 use super::brick_codec::{self, Bricks, Malformed, Reader};
 use super::lattice::Lattice;
-use super::masks::{BrickLightBits, MaskStore, BRICK_WORDS};
+use super::masks::{BrickEnclosure, BrickLightBits, MaskStore, BRICK_WORDS};
 use super::LightMesh;
 use crate::output::{write_atomically, OutputError};
 use crate::render::light::{LightSource, RenderLight};
 
 /// Bumped whenever the layout or the meaning of a bit changes; it is both
 /// in the header and in the key, so an old file is simply another name.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 
 const MAGIC: [u8; 8] = *b"LMMASKS\0";
 const HEADER_BYTES: usize = 8 + 4 + 16 + 4 + 8 + 8;
@@ -174,10 +184,51 @@ impl LightKey {
     }
 }
 
-/// Static-layer bits by light key and brick: the content of a cache file.
+/// Static-layer bits by light key and brick, and enclosure flags by
+/// brick: the content of a cache file.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct StaticMaskCache {
     sections: BTreeMap<LightKey, Bricks>,
+    enclosure: EnclosureFlags,
+}
+
+/// LMM1's enclosure flags by brick, with the bits of the probes' reach
+/// they were settled with; no brick where none is known.
+#[derive(Clone, Debug, Default, PartialEq)]
+struct EnclosureFlags {
+    reach: u32,
+    bricks: Bricks,
+}
+
+impl EnclosureFlags {
+    /// The flags a brick holds, as [`brick_codec`] stores a pair of words
+    /// whose second lies within the first: known as valid, enclosed as
+    /// visible.
+    fn as_bits(flags: &BrickEnclosure) -> BrickLightBits {
+        BrickLightBits {
+            valid: flags.known,
+            visible: flags.enclosed,
+        }
+    }
+
+    fn of_bits(bits: &BrickLightBits) -> BrickEnclosure {
+        BrickEnclosure {
+            known: bits.valid,
+            enclosed: bits.visible,
+        }
+    }
+
+    /// ORs `other` in where it was settled with the same reach; flags of
+    /// another reach are not these flags, and `self`'s stand.
+    fn merge(&mut self, other: EnclosureFlags) {
+        if self.bricks.is_empty() {
+            *self = other;
+        } else if other.reach == self.reach {
+            for (brick, bits) in other.bricks {
+                merge_brick(&mut self.bricks, brick, &bits);
+            }
+        }
+    }
 }
 
 impl StaticMaskCache {
@@ -208,8 +259,21 @@ impl StaticMaskCache {
         });
     }
 
-    /// ORs `other` in. Static bits are a function of the key, so two
-    /// workers' files cannot disagree where both have a bit.
+    /// Takes the enclosure flags `store` has, settled with the probes'
+    /// `reach`.
+    pub fn add_enclosure(&mut self, store: &MaskStore, reach: f32) {
+        let bricks = (store.known_enclosures().iter())
+            .map(|(brick, flags)| (brick.to_array(), EnclosureFlags::as_bits(flags)))
+            .collect();
+        self.enclosure.merge(EnclosureFlags {
+            reach: reach.to_bits(),
+            bricks,
+        });
+    }
+
+    /// ORs `other` in. Static bits and enclosure flags are functions of
+    /// the key (and the reach), so two workers' files cannot disagree
+    /// where both have a bit.
     pub fn merge(&mut self, other: StaticMaskCache) {
         for (light, bricks) in other.sections {
             let section = self.sections.entry(light).or_default();
@@ -217,11 +281,12 @@ impl StaticMaskCache {
                 merge_brick(section, brick, &bits);
             }
         }
+        self.enclosure.merge(other.enclosure);
     }
 
-    /// Whether it holds no section.
+    /// Whether it holds no section and no enclosure flag.
     pub fn is_empty(&self) -> bool {
-        self.sections.is_empty()
+        self.sections.is_empty() && self.enclosure.bricks.is_empty()
     }
 
     /// Valid static bits held, over all sections.
@@ -236,6 +301,25 @@ impl StaticMaskCache {
                     .sum::<u64>()
             })
             .sum()
+    }
+
+    /// Imports the enclosure flags settled with the probes' `reach` into
+    /// the bricks `store` has (those the import of bits made, or earlier
+    /// frames); returns the flags imported.
+    pub fn import_enclosure(&self, store: &mut MaskStore, reach: f32) -> u64 {
+        if self.enclosure.reach != reach.to_bits() {
+            return 0;
+        }
+        let mut imported = 0;
+        for (&brick, bits) in &self.enclosure.bricks {
+            let brick = IVec3::from_array(brick);
+            if store.has_brick(brick) {
+                let known: u32 = bits.valid.iter().map(|word| word.count_ones()).sum();
+                imported += u64::from(known);
+                store.import_enclosure(brick, &EnclosureFlags::of_bits(bits));
+            }
+        }
+        imported
     }
 
     /// Imports the bits of every light of `lights` whose position has a
@@ -286,6 +370,10 @@ impl StaticMaskCache {
             brick_codec::encode(bricks, previous, &mut bytes);
             previous = Some(bricks);
         }
+        let flags = &self.enclosure;
+        bytes.extend_from_slice(&flags.reach.to_le_bytes());
+        bytes.extend_from_slice(&(flags.bricks.len() as u32).to_le_bytes());
+        brick_codec::encode(&flags.bricks, None, &mut bytes);
         let body = &bytes[HEADER_BYTES..];
         let (length, checksum) = (body.len() as u64, xxh3_64(body));
         bytes[length_at..length_at + 8].copy_from_slice(&length.to_le_bytes());
@@ -347,6 +435,10 @@ impl StaticMaskCache {
             cache.sections.insert(light, bricks);
             previous = Some(light);
         }
+        let reach = reader.u32()?;
+        let count = reader.u32()? as usize;
+        let bricks = brick_codec::decode(&mut reader, count, None)?;
+        cache.enclosure = EnclosureFlags { reach, bricks };
         if reader.remaining() != 0 {
             return Err(CacheError::Malformed("bytes after the last section"));
         }
@@ -474,7 +566,10 @@ impl LightMesh {
             return 0;
         };
         let max_bricks = self.memory_limit / 2 / MaskStore::brick_bytes(lights.len());
-        cache.import(&mut self.masks, lights, max_bricks)
+        let imported = cache.import(&mut self.masks, lights, max_bricks);
+        let reach = self.probe_reach();
+        cache.import_enclosure(&mut self.masks, reach);
+        imported
     }
 
     /// Copies the static bits of the lights `moved` into `kept` before
@@ -488,12 +583,12 @@ impl LightMesh {
         kept.add_lights(&self.masks, lights, moved);
     }
 
-    /// Saves the static bits of `lights` (at their current positions) and
-    /// those `kept` from earlier positions to `dir`, merged with the file
-    /// there. Where the run found no static bit and kept none, every bit
-    /// the store holds came from that file, and nothing is written: a
-    /// warm run does not rewrite (and first re-read) a file of tens of
-    /// megabytes to add nothing.
+    /// Saves the static bits of `lights` (at their current positions),
+    /// those `kept` from earlier positions and the enclosure flags to
+    /// `dir`, merged with the file there. Where the run found no static
+    /// bit and no flag and kept none, everything the store holds came from
+    /// that file, and nothing is written: a warm run does not rewrite (and
+    /// first re-read) a file of tens of megabytes to add nothing.
     pub fn save_static_masks(
         &self,
         dir: &Path,
@@ -501,11 +596,13 @@ impl LightMesh {
         lights: &[RenderLight],
         kept: &StaticMaskCache,
     ) -> Result<(), OutputError> {
-        if self.masks.static_bits_found() == 0 && kept.is_empty() {
+        let found = self.masks.static_bits_found() + self.masks.enclosure_flags_found();
+        if found == 0 && kept.is_empty() {
             return Ok(());
         }
         let key = CacheKey::new(geometry, &self.lattice);
         let mut cache = StaticMaskCache::from_store(&self.masks, lights);
+        cache.add_enclosure(&self.masks, self.probe_reach());
         cache.merge(kept.clone());
         cache.save(dir, key)
     }
@@ -514,6 +611,7 @@ impl LightMesh {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lightmesh::masks::split;
 
     fn point(position: Vec3) -> RenderLight {
         RenderLight {
@@ -559,6 +657,48 @@ mod tests {
         assert_eq!(store.get(IVec3::new(40, -3, 0), 0), None, "statically open");
         assert_eq!(store.nodes_cached(), 3);
         assert_eq!(store.static_bits(), 3);
+    }
+
+    #[test]
+    fn enclosure_flags_round_trip_and_keep_to_their_reach() {
+        let (mut cache, lights) = sample();
+        let mut store = MaskStore::new(lights.len());
+        store.set(IVec3::new(-9, 2, 17), 0, true, None);
+        let brick = split(IVec3::new(-9, 2, 17)).0;
+        let flags = BrickEnclosure {
+            known: [0b111, 0, 0, 0, 0, 0, 0, 1 << 63],
+            enclosed: [0b101, 0, 0, 0, 0, 0, 0, 0],
+        };
+        store.merge_enclosure(brick, &flags);
+        assert_eq!(store.enclosure_flags_found(), 4);
+        cache.add_enclosure(&store, 1.5);
+        let key = CacheKey(3);
+        let decoded = StaticMaskCache::decode(&cache.encode(key), key).unwrap();
+        assert_eq!(decoded, cache);
+
+        // Into a store holding the brick, at the same reach only; imports
+        // are not flags found.
+        let mut into = MaskStore::new(lights.len());
+        assert_eq!(decoded.import(&mut into, &lights, usize::MAX), 3);
+        assert_eq!(decoded.import_enclosure(&mut into, 2.0), 0);
+        assert_eq!(into.enclosure(brick), BrickEnclosure::default());
+        assert_eq!(decoded.import_enclosure(&mut into, 1.5), 4);
+        assert_eq!(into.enclosure(brick), flags);
+        assert_eq!(into.enclosure_flags_found(), 0);
+        assert_eq!(
+            decoded.import_enclosure(&mut MaskStore::new(2), 1.5),
+            0,
+            "no brick made"
+        );
+
+        // A file's flags of another reach do not mix with the run's.
+        let mut other = StaticMaskCache::default();
+        let mut elsewhere = MaskStore::new(2);
+        elsewhere.merge_enclosure(IVec3::new(5, 5, 5), &flags);
+        other.add_enclosure(&elsewhere, 2.0);
+        let mut merged = cache.clone();
+        merged.merge(other);
+        assert_eq!(merged, cache);
     }
 
     #[test]

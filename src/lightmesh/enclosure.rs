@@ -31,8 +31,9 @@
 //! on the GPU, before the fill's answers are back, so there a node whose
 //! bits are still being traced is probed too (it may turn out blocked).
 //! Only static geometry is probed, so no moving object can change a flag,
-//! probing a node early changes no image, and reuse stays exact; the
-//! flags are not in the disk cache, so each run probes its nodes once.
+//! probing a node early changes no image, and reuse stays exact. The disk
+//! cache keeps the flags with the static bits (`super::cache`), so a warm
+//! run probes only nodes no earlier run settled.
 
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;

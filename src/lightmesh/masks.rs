@@ -20,7 +20,7 @@
 //! - invalidation (`super::invalidate`, before a frame) only clears
 //!   validity bits;
 //! - the disk cache's import (`super::cache`, when the mesh is made) sets
-//!   static bits an earlier run computed;
+//!   static bits and enclosure flags an earlier run computed;
 //! - the fill sets the bits the frame demanded: on the CPU
 //!   (`super::fill`), or for the GPU's fill (`super::segments`) in two
 //!   steps, the bits its shafts and walls settle before the GPU traces
@@ -62,6 +62,9 @@ pub struct MaskStore {
     /// cache's imports not counted): none, and the store holds nothing its
     /// cache file lacks.
     static_found: u64,
+    /// Enclosure flags LMM1's probes settled since the store was made (the
+    /// disk cache's imports not counted).
+    enclosure_found: u64,
     /// Which store this is, and how many edits it has had: a copy of its
     /// bricks elsewhere (the GPU backend's pool) knows by these whether a
     /// brick it holds is still current, without comparing bits.
@@ -78,6 +81,7 @@ impl Clone for MaskStore {
             bricks: self.bricks.clone(),
             nodes: self.nodes,
             static_found: self.static_found,
+            enclosure_found: self.enclosure_found,
             known: self.known.clone(),
             id: next_store_id(),
             revision: self.revision,
@@ -223,6 +227,7 @@ impl MaskStore {
             nodes: 0,
             known: KnownCounts::new(lights),
             static_found: 0,
+            enclosure_found: 0,
             id: next_store_id(),
             revision: 0,
         }
@@ -479,13 +484,47 @@ impl MaskStore {
 
     /// Records the enclosure flags settled for the `known` slots of a brick.
     pub fn merge_enclosure(&mut self, brick: IVec3, settled: &BrickEnclosure) {
+        self.enclosure_found += self.add_enclosure(brick, settled);
+    }
+
+    /// Takes the enclosure flags the disk cache holds for a brick the
+    /// store has (it creates none): they come from no probe of this run.
+    pub fn import_enclosure(&mut self, brick: IVec3, flags: &BrickEnclosure) {
+        if self.has_brick(brick) {
+            self.add_enclosure(brick, flags);
+        }
+    }
+
+    /// Flags settled since the store was made; those the disk cache
+    /// imported are not counted.
+    pub fn enclosure_flags_found(&self) -> u64 {
+        self.enclosure_found
+    }
+
+    /// Every brick's flags that some node has, in ascending order of
+    /// coordinates.
+    pub fn known_enclosures(&self) -> Vec<(IVec3, BrickEnclosure)> {
+        let mut flags: Vec<_> = (self.bricks.iter())
+            .filter(|(_, stored)| stored.enclosure.known.iter().any(|&word| word != 0))
+            .map(|(&brick, stored)| (brick, stored.enclosure))
+            .collect();
+        flags.sort_unstable_by_key(|(brick, _)| brick.to_array());
+        flags
+    }
+
+    /// ORs `settled`'s known flags into the brick's; returns how many it
+    /// did not know.
+    fn add_enclosure(&mut self, brick: IVec3, settled: &BrickEnclosure) -> u64 {
         let stored = &mut self.edit(brick).0.enclosure;
+        let mut newly_known = 0;
         for word in 0..BRICK_WORDS {
             let known = settled.known[word];
+            newly_known += u64::from((known & !stored.known[word]).count_ones());
             stored.enclosed[word] =
                 (stored.enclosed[word] & !known) | (settled.enclosed[word] & known);
             stored.known[word] |= known;
         }
+        newly_known
     }
 
     /// The static-layer bits of the lights `wanted` sets (64 lights a
