@@ -182,8 +182,10 @@ impl CpuBackend {
 
 /// The stages of a light-mesh frame that fill masks (hits, demand, fill),
 /// band by band on the current rayon pool, without shading: what a farm's
-/// first task runs to fill the disk cache (`lmanim warm`). Enclosure
-/// flags are left to the render, since the cache does not keep them.
+/// first task runs to fill the disk cache (`lmanim warm`). LMM1's
+/// enclosure flags are left to the render tasks (the warm task does not
+/// know the method): each probes the nodes it needs, and their saves
+/// merge the flags into the cache.
 pub(super) fn warm_light_mesh(
     job: &FrameJob,
     mesh: &mut LightMesh,
