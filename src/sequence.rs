@@ -390,8 +390,9 @@ impl Sequence {
         backend.prepare_pipelines(method, &settings.aovs, progress);
     }
 
-    /// Computes the light-mesh masks the placed frame will need, without
-    /// shading it (`lmanim warm`), filling `stats`.
+    /// Computes the light-mesh masks the placed frame will need, and the
+    /// enclosure flags where the method is LMM1, without shading it
+    /// (`lmanim warm`), filling `stats`.
     pub fn warm(
         &mut self,
         backend: &mut Backend,
@@ -403,7 +404,12 @@ impl Sequence {
         let mesh = &mut self.light_mesh;
         let mesh = prepared_light_mesh(mesh, file, self.scene_radius, placed, settings)?;
         let job = frame_job(&self.scene, &self.world, placed, settings, &self.shadows);
-        (backend.warm(&job, mesh, stats)).map_err(|error| run_error(file, error))?;
+        let probe_enclosure = !self
+            .shadows
+            .resolve(settings.method, &[])
+            .tests_point_to_node();
+        (backend.warm(&job, mesh, probe_enclosure, stats))
+            .map_err(|error| run_error(file, error))?;
         self.report_cache_load(stats);
         Ok(())
     }

@@ -86,6 +86,9 @@ fn a_warmed_cache_gives_the_cold_frames_with_less_fill() {
         stats["frames"][0]["lightmesh"][field].as_u64().unwrap()
     };
     assert!(first(&warm_stats, "bits_loaded") > 0);
+    // LMM1's enclosure flags come from the warm task too.
+    assert!(first(&cold_stats, "nodes_probed") > 0);
+    assert_eq!(first(&warm_stats, "nodes_probed"), 0);
     // Only the dynamic layer (the rolling ball) is left to test.
     assert!(
         2 * first(&warm_stats, "fill_segments") < first(&cold_stats, "fill_segments"),

@@ -21,6 +21,7 @@ use super::band::{bands, resolve, TILE};
 use super::sampling::{film_position, lamp_sample};
 use super::{thread_pool, BackendError, RenderError};
 use crate::accel::Ray;
+use crate::lightmesh::demand::Demand;
 use crate::lightmesh::interpolate::{PointCounts, Scratch};
 use crate::lightmesh::{LightMesh, LightMeshStats};
 use crate::output::{Image, RenderedFrame};
@@ -103,15 +104,17 @@ impl CpuBackend {
     }
 
     /// Computes the masks `job`'s frame will need (hits, demand and fill,
-    /// band by band) without shading it; the light-mesh stats go to
-    /// `stats`.
+    /// band by band, and LMM1's enclosure flags where `probe_enclosure`)
+    /// without shading it; the light-mesh stats go to `stats`.
     pub fn warm(
         &self,
         job: &FrameJob,
         mesh: &mut LightMesh,
+        probe_enclosure: bool,
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
-        self.pool.install(|| warm_light_mesh(job, mesh, stats))
+        self.pool
+            .install(|| warm_light_mesh(job, mesh, probe_enclosure, stats))
     }
 
     /// Renders one frame with every light visible from every point
@@ -180,15 +183,15 @@ impl CpuBackend {
     }
 }
 
-/// The stages of a light-mesh frame that fill masks (hits, demand, fill),
-/// band by band on the current rayon pool, without shading: what a farm's
-/// first task runs to fill the disk cache (`lmanim warm`). LMM1's
-/// enclosure flags are left to the render tasks (the warm task does not
-/// know the method): each probes the nodes it needs, and their saves
-/// merge the flags into the cache.
+/// The stages of a light-mesh frame that fill masks (hits, demand, fill,
+/// and LMM1's enclosure where `probe_enclosure`), band by band on the
+/// current rayon pool, without shading: what a farm's first task runs to
+/// fill the disk cache (`lmanim warm`), which keeps the static bits and
+/// the enclosure flags.
 pub(super) fn warm_light_mesh(
     job: &FrameJob,
     mesh: &mut LightMesh,
+    probe_enclosure: bool,
     stats: &mut FrameStats,
 ) -> Result<(), RenderError> {
     let lanes = LightLanes::new(&job.frame.lights);
@@ -202,11 +205,30 @@ pub(super) fn warm_light_mesh(
         let start = Instant::now();
         mesh.fill(&demand, &job.frame.lights, job.world, &mut work)?;
         stats.add_stage_time("fill", start.elapsed().as_secs_f64());
+        if probe_enclosure {
+            settle_enclosure(job, mesh, &demand, stats, &mut work);
+        }
         stats.shading_points += points.len() as u64;
     }
     stats.rays.shadow += work.fill_segments;
     stats.lightmesh = Some(mesh.frame_stats(work, PointCounts::default(), stats.shading_points));
     Ok(())
+}
+
+/// LMM1's enclosure stage after the fill: the flags of the nodes `demand`
+/// names that need one, probed on the CPU.
+fn settle_enclosure(
+    job: &FrameJob,
+    mesh: &mut LightMesh,
+    demand: &Demand,
+    stats: &mut FrameStats,
+    work: &mut LightMeshStats,
+) {
+    let start = Instant::now();
+    let enclosure = mesh.settle_enclosure(demand, job.world);
+    work.nodes_probed += enclosure.probed;
+    work.enclosure_reused += enclosure.reused;
+    stats.add_stage_time("enclosure", start.elapsed().as_secs_f64());
 }
 
 /// Stages 1–2 for one band of rows: the camera rays' hits, then the
@@ -355,11 +377,7 @@ impl MeshStage<'_> {
         stats.add_stage_time("fill", start.elapsed().as_secs_f64());
 
         if !self.point_to_node_tests {
-            let start = Instant::now();
-            let enclosure = mesh.settle_enclosure(&demand, job.world);
-            lightmesh.nodes_probed += enclosure.probed;
-            lightmesh.enclosure_reused += enclosure.reused;
-            stats.add_stage_time("enclosure", start.elapsed().as_secs_f64());
+            settle_enclosure(job, mesh, &demand, stats, lightmesh);
         }
 
         let mesh = &*mesh;

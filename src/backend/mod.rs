@@ -135,17 +135,19 @@ impl Backend {
         }
     }
 
-    /// Computes the light-mesh masks `job`'s frame will need, without
-    /// shading it (`lmanim warm`); the light-mesh stats go to `stats`.
+    /// Computes the light-mesh masks `job`'s frame will need, and LMM1's
+    /// enclosure flags where `probe_enclosure`, without shading it
+    /// (`lmanim warm`); the light-mesh stats go to `stats`.
     pub fn warm(
         &mut self,
         job: &FrameJob,
         mesh: &mut LightMesh,
+        probe_enclosure: bool,
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
         match self {
-            Backend::Cpu(cpu) => cpu.warm(job, mesh, stats),
-            Backend::Gpu(gpu) => gpu.warm(job, mesh, stats),
+            Backend::Cpu(cpu) => cpu.warm(job, mesh, probe_enclosure, stats),
+            Backend::Gpu(gpu) => gpu.warm(job, mesh, probe_enclosure, stats),
         }
     }
 

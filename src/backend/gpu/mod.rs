@@ -362,9 +362,10 @@ impl GpuBackend {
         &self,
         job: &FrameJob,
         mesh: &mut LightMesh,
+        probe_enclosure: bool,
         stats: &mut FrameStats,
     ) -> Result<(), RenderError> {
-        (self.pool).install(|| super::cpu::warm_light_mesh(job, mesh, stats))
+        (self.pool).install(|| super::cpu::warm_light_mesh(job, mesh, probe_enclosure, stats))
     }
 
     /// The bricks of `mesh` whose slots in the mask pool do not hold
