@@ -100,7 +100,9 @@ pub fn decode(
         return Err(Malformed("more bricks than bytes"));
     }
     let mut references = References::new(previous);
-    let mut bricks = Bricks::new();
+    // Collected in order, then built at once: a map made from a sorted
+    // list is built in one pass, where inserting searches for each.
+    let mut bricks = Vec::with_capacity(count);
     let mut last: Option<[i32; 3]> = None;
     for _ in 0..count {
         let mut brick = [0; 3];
@@ -136,9 +138,9 @@ pub fn decode(
         if (bits.visible.iter().zip(&bits.valid)).any(|(visible, valid)| visible & !valid != 0) {
             return Err(Malformed("a visible bit that is not valid"));
         }
-        bricks.insert(brick, bits);
+        bricks.push((brick, bits));
     }
-    Ok(bricks)
+    Ok(Bricks::from_iter(bricks))
 }
 
 /// The previous section's valid words, brick by brick in ascending order.
