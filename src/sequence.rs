@@ -404,10 +404,9 @@ impl Sequence {
         let mesh = &mut self.light_mesh;
         let mesh = prepared_light_mesh(mesh, file, self.scene_radius, placed, settings)?;
         let job = frame_job(&self.scene, &self.world, placed, settings, &self.shadows);
-        let probe_enclosure = !self
-            .shadows
-            .resolve(settings.method, &[])
-            .tests_point_to_node();
+        // As `render` resolves the frame's method.
+        let method = self.shadows.frame_method(settings.method, &placed.lights);
+        let probe_enclosure = !method.tests_point_to_node();
         (backend.warm(&job, mesh, probe_enclosure, stats))
             .map_err(|error| run_error(file, error))?;
         self.report_cache_load(stats);

@@ -219,7 +219,8 @@ impl EnclosureFlags {
     }
 
     /// ORs `other` in where it was settled with the same reach; flags of
-    /// another reach are not these flags, and `self`'s stand.
+    /// another reach are not these flags, and `self`'s stand (unless
+    /// `self` holds none: then `other`'s are all there is).
     fn merge(&mut self, other: EnclosureFlags) {
         if self.bricks.is_empty() {
             *self = other;
@@ -262,7 +263,7 @@ impl StaticMaskCache {
     /// Takes the enclosure flags `store` has, settled with the probes'
     /// `reach`.
     pub fn add_enclosure(&mut self, store: &MaskStore, reach: f32) {
-        let bricks = (store.known_enclosures().iter())
+        let bricks = (store.known_enclosures())
             .map(|(brick, flags)| (brick.to_array(), EnclosureFlags::as_bits(flags)))
             .collect();
         self.enclosure.merge(EnclosureFlags {
@@ -305,21 +306,16 @@ impl StaticMaskCache {
 
     /// Imports the enclosure flags settled with the probes' `reach` into
     /// the bricks `store` has (those the import of bits made, or earlier
-    /// frames); returns the flags imported.
+    /// frames); returns the flags the store did not know.
     pub fn import_enclosure(&self, store: &mut MaskStore, reach: f32) -> u64 {
         if self.enclosure.reach != reach.to_bits() {
             return 0;
         }
-        let mut imported = 0;
-        for (&brick, bits) in &self.enclosure.bricks {
-            let brick = IVec3::from_array(brick);
-            if store.has_brick(brick) {
-                let known: u32 = bits.valid.iter().map(|word| word.count_ones()).sum();
-                imported += u64::from(known);
-                store.import_enclosure(brick, &EnclosureFlags::of_bits(bits));
-            }
-        }
-        imported
+        (self.enclosure.bricks.iter())
+            .map(|(&brick, bits)| {
+                store.import_enclosure(IVec3::from_array(brick), &EnclosureFlags::of_bits(bits))
+            })
+            .sum()
     }
 
     /// Imports the bits of every light of `lights` whose position has a

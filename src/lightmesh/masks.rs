@@ -489,9 +489,11 @@ impl MaskStore {
 
     /// Takes the enclosure flags the disk cache holds for a brick the
     /// store has (it creates none): they come from no probe of this run.
-    pub fn import_enclosure(&mut self, brick: IVec3, flags: &BrickEnclosure) {
-        if self.has_brick(brick) {
-            self.add_enclosure(brick, flags);
+    /// Returns how many flags it did not know.
+    pub fn import_enclosure(&mut self, brick: IVec3, flags: &BrickEnclosure) -> u64 {
+        match self.has_brick(brick) {
+            true => self.add_enclosure(brick, flags),
+            false => 0,
         }
     }
 
@@ -501,15 +503,11 @@ impl MaskStore {
         self.enclosure_found
     }
 
-    /// Every brick's flags that some node has, in ascending order of
-    /// coordinates.
-    pub fn known_enclosures(&self) -> Vec<(IVec3, BrickEnclosure)> {
-        let mut flags: Vec<_> = (self.bricks.iter())
+    /// The flags of every brick where some node has one, in no order.
+    pub fn known_enclosures(&self) -> impl Iterator<Item = (IVec3, &BrickEnclosure)> {
+        (self.bricks.iter())
             .filter(|(_, stored)| stored.enclosure.known.iter().any(|&word| word != 0))
-            .map(|(&brick, stored)| (brick, stored.enclosure))
-            .collect();
-        flags.sort_unstable_by_key(|(brick, _)| brick.to_array());
-        flags
+            .map(|(&brick, stored)| (brick, &stored.enclosure))
     }
 
     /// ORs `settled`'s known flags into the brick's; returns how many it

@@ -40,15 +40,15 @@ impl WideBall {
         }
     }
 
-    /// Appends to `out` the mesh nodes of the wide half-ball of the point
-    /// at `p` with normal `n`. A wide node's position is its mesh node's to
-    /// the bit (2h·i and h·2i round alike: scaling by two is exact).
-    /// The same nodes a row at a time, in coordinates of the wide set's
-    /// lattice: a mesh node is one of them times [`STEPS`].
+    /// The nodes of [`WideBall::nodes`] a row at a time, in coordinates of
+    /// the wide set's lattice: a mesh node is one of them times [`STEPS`].
     pub fn rows(&self, p: Vec3, n: Vec3, visit: impl FnMut(Row)) {
         self.lattice.half_ball_rows(p, n, self.radius, visit);
     }
 
+    /// Appends to `out` the mesh nodes of the wide half-ball of the point
+    /// at `p` with normal `n`. A wide node's position is its mesh node's to
+    /// the bit (2h·i and h·2i round alike: scaling by two is exact).
     pub fn nodes(&self, p: Vec3, n: Vec3, out: &mut Vec<IVec3>) {
         let first = out.len();
         self.lattice.half_ball(p, n, self.radius, out);
