@@ -194,10 +194,13 @@ impl LightMesh {
         (reach.par_chunks_mut(words))
             .zip(faint.par_chunks_mut(words))
             .zip(points)
-            .for_each_init(LampTerms::default, |terms, ((reach, faint), point)| {
-                reaching_lights(&PointLanes::new(point), lights, (reach, termed), terms);
-                terms.mark(parts, faint);
-            });
+            .for_each_init(
+                || LampTerms::new(words),
+                |terms, ((reach, faint), point)| {
+                    reaching_lights(&PointLanes::new(point), lights, (reach, termed), terms);
+                    terms.mark(parts, faint);
+                },
+            );
 
         let table_bytes = BRICK_NODES * words * std::mem::size_of::<u64>();
         let brick_limit = self.memory_limit / table_bytes;

@@ -65,9 +65,10 @@ fn significand(term: f32) -> u32 {
     term.to_bits() & 0x7f_ffff | 0x80_0000
 }
 
-/// The faint lamps of one point, found from its lamps' terms in two
-/// passes: [`FaintLamps::brightest`] over them all, then
-/// [`FaintLamps::add`] of each, then [`FaintLamps::faintest_kept`].
+/// The faint lamps of one point, found from its lamps' terms: their
+/// largest exponent field ([`FaintLamps::brightest`]), then their
+/// significands into buckets (`add_sum`), then
+/// [`FaintLamps::faintest_kept`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct FaintLamps {
     /// E, the largest exponent field (0 for a point with no lamp light).
@@ -77,7 +78,7 @@ pub struct FaintLamps {
 }
 
 impl FaintLamps {
-    /// Ready to [`FaintLamps::add`] lamps at a point whose brightest lamp
+    /// Ready to count lamps into buckets at a point whose brightest lamp
     /// term has exponent field `brightest` (the largest [`exponent`]).
     pub fn brightest(brightest: u32) -> FaintLamps {
         FaintLamps {
@@ -86,19 +87,17 @@ impl FaintLamps {
         }
     }
 
-    /// The bucket of a lamp whose term is `term`; `None` where it takes no
-    /// part.
-    pub fn bucket(&self, term: f32) -> Option<u32> {
-        let exponent = exponent(term);
-        (exponent != 0).then(|| (self.brightest - exponent).min(LAST_BUCKET))
-    }
-
-    /// Counts the lamp whose term is `term` into its bucket.
-    pub fn add(&mut self, term: f32) {
-        if let Some(bucket) = self.bucket(term) {
-            let sum = &mut self.buckets[bucket as usize];
-            *sum = sum.saturating_add(significand(term));
+    /// Counts lamps whose terms have exponent field `exponent` and whose
+    /// significands sum to `sum` (saturating) into their bucket. Sums of
+    /// non-negative integers saturate to the same value however they are
+    /// grouped, so lamps may be summed per exponent first.
+    fn add_sum(&mut self, exponent: u32, sum: u32) {
+        if exponent == 0 {
+            return;
         }
+        let bucket = (self.brightest - exponent).min(LAST_BUCKET);
+        let into = &mut self.buckets[bucket as usize];
+        *into = into.saturating_add(sum);
     }
 
     /// The first bucket whose lamps are faint under the budget of
@@ -122,20 +121,47 @@ impl FaintLamps {
     }
 }
 
-/// The terms of one point's lamps, gathered a block of lights at a time
-/// as demand evaluates them ([`LampTerms::add`]), then sorted into faint
-/// and kept ([`LampTerms::mark`]). A lamp's term is its Omega's largest
-/// channel, as formula (2) will weigh it. One per thread, reused from
-/// point to point.
-#[derive(Default)]
+/// Exponent fields of an f32.
+const EXPONENTS: usize = 256;
+
+/// One point's lamps, gathered a block of lights at a time as demand
+/// evaluates their terms ([`LampTerms::add`]), then sorted into faint and
+/// kept ([`LampTerms::mark`]). A lamp's term is its Omega's largest
+/// channel, as formula (2) will weigh it. Lamps are kept by their term's
+/// exponent field, the one thing the rule tells them apart by: per field,
+/// the sum of their significands and a bit per lamp, so a point costs a
+/// few operations per lamp and per field its lamps span, with no list to
+/// walk again. One per thread, reused from point to point.
 pub struct LampTerms {
-    terms: Vec<(usize, f32)>,
+    words: usize,
+    /// Per exponent field, its lamps' significands summed, saturating.
+    sums: [u32; EXPONENTS],
+    /// Per exponent field, `words` words: its lamps, a bit per light.
+    lamps: Vec<u64>,
+    /// The fields this point's lamps span (empty: `lowest` > `highest`).
+    lowest: usize,
+    highest: usize,
 }
 
 impl LampTerms {
-    /// Ready for the next point.
+    /// For frames of `words` words of 64 lights.
+    pub fn new(words: usize) -> LampTerms {
+        LampTerms {
+            words,
+            sums: [0; EXPONENTS],
+            lamps: vec![0; EXPONENTS * words],
+            lowest: EXPONENTS,
+            highest: 0,
+        }
+    }
+
+    /// Ready for the next point: clears the fields the last one used.
     pub fn clear(&mut self) {
-        self.terms.clear();
+        if self.lowest <= self.highest {
+            self.sums[self.lowest..=self.highest].fill(0);
+            self.lamps[self.lowest * self.words..(self.highest + 1) * self.words].fill(0);
+        }
+        (self.lowest, self.highest) = (EXPONENTS, 0);
     }
 
     /// Adds the lamps of `lanes` (a bit per lane of the block whose first
@@ -144,27 +170,47 @@ impl LampTerms {
     #[inline]
     pub fn add(&mut self, first: usize, lanes: u8, omega: &OmegaBlock) {
         for lane in set_bits((lanes & omega.reaching).into()) {
-            (self.terms).push((first + lane, omega.get(lane).max_element()));
+            self.add_lamp(first + lane, omega.get(lane).max_element());
         }
+    }
+
+    /// Adds lamp number `light`, whose term is `term`.
+    fn add_lamp(&mut self, light: usize, term: f32) {
+        let field = exponent(term) as usize;
+        if field == 0 {
+            return; // takes no part, never faint
+        }
+        self.sums[field] = self.sums[field].saturating_add(significand(term));
+        self.lamps[field * self.words + light / 64] |= 1 << (light % 64);
+        self.lowest = self.lowest.min(field);
+        self.highest = self.highest.max(field);
     }
 
     /// Sets in `faint` (a bit per light, 64 to a word) the faint lamps
     /// among those added, under the budget of `parts` ([`budget_parts`]).
     pub fn mark(&self, parts: u32, faint: &mut [u64]) {
         faint.fill(0);
-        if parts == 0 {
+        if parts == 0 || self.lowest > self.highest {
             return;
         }
-        let brightest = self.terms.iter().map(|&(_, term)| exponent(term)).max();
-        let mut buckets = FaintLamps::brightest(brightest.unwrap_or(0));
-        self.terms.iter().for_each(|&(_, term)| buckets.add(term));
+        let mut buckets = FaintLamps::brightest(self.highest as u32);
+        for field in self.lowest..=self.highest {
+            buckets.add_sum(field as u32, self.sums[field]);
+        }
         let first_faint = buckets.faintest_kept(parts);
-        for &(light, term) in &self.terms {
-            if buckets
-                .bucket(term)
-                .is_some_and(|bucket| bucket >= first_faint)
-            {
-                faint[light / 64] |= 1 << (light % 64);
+        if first_faint == NO_FAINT_BUCKET {
+            return;
+        }
+        // A lamp of field e is in bucket min(E − e, LAST_BUCKET), so it is
+        // faint where E − e reaches the first faint bucket (at most the
+        // last).
+        let Some(brightest_faint) = self.highest.checked_sub(first_faint as usize) else {
+            return;
+        };
+        for field in self.lowest..=brightest_faint {
+            let lamps = &self.lamps[field * self.words..(field + 1) * self.words];
+            for (faint, lamps) in faint.iter_mut().zip(lamps) {
+                *faint |= lamps;
             }
         }
     }
@@ -180,15 +226,32 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    /// The faint flags of `terms` under `share`, as a point finds them.
+    /// The faint flags of `terms` under `share` by the rule as the module
+    /// states it, lamp by lamp into buckets: the model both
+    /// [`LampTerms`] and the GPU's `faint.wgsl` must agree with.
     fn faint(terms: &[f32], share: f32) -> Vec<bool> {
         let brightest = terms.iter().map(|&t| exponent(t)).max().unwrap_or(0);
         let mut lamps = FaintLamps::brightest(brightest);
-        terms.iter().for_each(|&term| lamps.add(term));
+        (terms.iter()).for_each(|&term| lamps.add_sum(exponent(term), significand(term)));
         let first = lamps.faintest_kept(budget_parts(share));
-        terms
-            .iter()
-            .map(|&term| lamps.bucket(term).is_some_and(|bucket| bucket >= first))
+        let bucket = |term: f32| (brightest - exponent(term)).min(LAST_BUCKET);
+        (terms.iter())
+            .map(|&term| exponent(term) != 0 && bucket(term) >= first)
+            .collect()
+    }
+
+    /// The faint flags [`LampTerms`] marks for `terms` (lamp i's term at
+    /// light `lights[i]`), after it served another point.
+    fn marked(terms: &[f32], lights: &[usize], share: f32, words: usize) -> Vec<bool> {
+        let mut lamps = LampTerms::new(words);
+        lamps.add_lamp(0, 1.0);
+        lamps.add_lamp(words * 64 - 1, 1e-30);
+        lamps.clear();
+        (lights.iter().zip(terms)).for_each(|(&light, &term)| lamps.add_lamp(light, term));
+        let mut faint = vec![!0; words];
+        lamps.mark(budget_parts(share), &mut faint);
+        (lights.iter())
+            .map(|&light| faint[light / 64] >> (light % 64) & 1 == 1)
             .collect()
     }
 
@@ -212,6 +275,18 @@ mod tests {
     }
 
     #[test]
+    fn a_faintest_bucket_over_the_budget_leaves_every_lamp_kept() {
+        // 300 lamps 2^100 times fainter than the brightest share the last
+        // bucket, whose light, rounded up, is over the budget.
+        let mut terms = vec![1.0];
+        terms.extend([1e-30; 300]);
+        let share = 1.0 / 65536.0;
+        assert_eq!(faint(&terms, share), [false; 301]);
+        let lights: Vec<usize> = (0..terms.len()).collect();
+        assert_eq!(marked(&terms, &lights, share, 5), [false; 301]);
+    }
+
+    #[test]
     fn subnormal_and_zero_terms_take_no_part() {
         let terms = [1.0, 0.0, f32::from_bits(1), 1e-9];
         assert_eq!(faint(&terms, 1.0 / 16.0), [false, false, false, true]);
@@ -227,6 +302,39 @@ mod tests {
     }
 
     proptest! {
+        /// Lamps kept by exponent field mark what the rule marks lamp by
+        /// lamp, over five words of lights in any order, through
+        /// saturated sums, zero and subnormal terms, and with a previous
+        /// point's fields cleared.
+        #[test]
+        fn lamp_terms_mark_what_the_rule_marks(
+            terms in prop::collection::vec(
+                prop_oneof![
+                    Just(0.0f32),
+                    Just(f32::from_bits(3)),
+                    Just(f32::MAX),
+                    1e-38f32..1e-20,
+                    1e-12f32..1e-6,
+                    1e-6f32..1e-2,
+                    1e-2f32..10.0,
+                ],
+                0..300,
+            ),
+            seed in any::<u64>(),
+            share in 0.0f32..=MAX_FAINT_SHARE,
+        ) {
+            let mut lights: Vec<usize> = (0..terms.len()).collect();
+            let mut state = seed | 1;
+            for i in (1..lights.len()).rev() {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                lights.swap(i, (state % (i as u64 + 1)) as usize);
+            }
+            let words = 5;
+            prop_assert_eq!(marked(&terms, &lights, share, words), faint(&terms, share));
+        }
+
         /// The bound the rule exists for: the faint lamps' terms add up to
         /// at most ε of all the terms, and the brightest is never faint.
         #[test]
