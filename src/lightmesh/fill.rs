@@ -85,9 +85,9 @@ impl LayerTest<'_> {
     /// missing bits whose segment is blocked.
     fn settle(&self, positions: &[Vec3], missing: &[u64], work: &mut FillWork) -> Vec<u64> {
         let mut blocked = vec![0; missing.len()];
-        for (bit, members) in holders_by_bit(missing) {
+        for (bit, members) in holders_by_bit(missing).iter() {
             let light = &self.lights[self.word * 64 + bit];
-            self.settle_group(light, 1 << bit, positions, &members, &mut blocked, work);
+            self.settle_group(light, 1 << bit, positions, members, &mut blocked, work);
         }
         blocked
     }

@@ -268,19 +268,19 @@ impl LightMesh {
             // its own light's bits, so the groups made before it stand.
             let static_groups = match shafts {
                 Shafts::Test => holders_by_bit(&bits.test_static),
-                Shafts::Skip => Vec::new(),
+                Shafts::Skip => holders_by_bit(&[]),
             };
-            for (bit, members) in static_groups {
-                let blocked = match fill.static_group(&members, &positions, light(bit), world) {
+            for (bit, members) in static_groups.iter() {
+                let blocked = match fill.static_group(members, &positions, light(bit), world) {
                     Group::Clear => {
-                        for &slot in &members {
+                        for &slot in members {
                             bits.test_static[slot] &= !(1 << bit);
                             bits.known_visible[slot] |= 1 << bit;
                             fill.static_clear.push(place(slot, bit));
                         }
                         continue;
                     }
-                    Group::Hidden => &members[..],
+                    Group::Hidden => members,
                     Group::FirstBlocked => &members[..1],
                     Group::Mixed => continue,
                 };
@@ -300,15 +300,15 @@ impl LightMesh {
                     .map(|slot| bits.test_dynamic[slot] & bits.known_visible[slot])
                     .collect(),
             };
-            for (bit, members) in holders_by_bit(&open_dynamic) {
+            for (bit, members) in holders_by_bit(&open_dynamic).iter() {
                 let clear = !world.has_dynamic()
-                    || shaft_box(&members, &positions).is_some_and(|bounds| {
+                    || shaft_box(members, &positions).is_some_and(|bounds| {
                         fill.shaft_is_clear(bounds, light(bit), |shaft| {
                             world.shaft_is_clear_dynamic(shaft)
                         })
                     });
                 if clear {
-                    for &slot in &members {
+                    for &slot in members {
                         bits.test_dynamic[slot] &= !(1 << bit);
                         fill.dynamic_clear.push(place(slot, bit));
                     }
