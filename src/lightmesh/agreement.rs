@@ -34,7 +34,7 @@
 use glam::{IVec3, Vec3};
 use rustc_hash::FxHashMap;
 
-use super::lattice::{Lattice, MAX_NODE_COORDINATE};
+use super::lattice::{self, Lattice, MAX_NODE_COORDINATE};
 use super::masks::{split, BrickCache, BRICK_EDGE};
 
 /// Nodes along each edge of a tile: a divisor of [`BRICK_EDGE`], so a
@@ -118,7 +118,7 @@ impl Agreement {
         if !self.usable {
             return false;
         }
-        let cell = self.lattice.local(p).floor();
+        let cell = lattice::floor(self.lattice.local(p));
         if !cell.is_finite() || cell.abs().max_element() >= MAX_NODE_COORDINATE {
             return false; // too far out for node coordinates
         }

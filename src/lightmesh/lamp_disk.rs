@@ -31,7 +31,7 @@
 
 use glam::{IVec3, Vec3};
 
-use super::lattice::Lattice;
+use super::lattice::{self, Lattice};
 
 /// Points spread evenly over the unit disk, a Vogel spiral: point i at
 /// radius √((i + ½)/N) and angle i times the golden angle. Written as the
@@ -102,7 +102,7 @@ pub fn disk_nodes(
         #[allow(clippy::manual_clamp)]
         let lift = ((level.h - height) / rise).max(0.0).min(0.5);
         let sample = (p + offset) + (to_lamp - offset) * lift;
-        let node = (level.local(sample) + Vec3::splat(0.5)).floor().as_ivec3();
+        let node = lattice::floor(level.local(sample) + Vec3::splat(0.5)).as_ivec3();
         out.push((node, offset.length_squared()));
     }
 }

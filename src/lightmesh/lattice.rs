@@ -23,6 +23,36 @@ pub const MAX_NODE_COORDINATE: f32 = (1 << 28) as f32;
 /// at 8 a point already averages a thousand nodes. Settings refuse more.
 pub const MAX_KI: f32 = 8.0;
 
+/// ⌊v⌋ per axis, the very values `Vec3::floor` gives (−0 and NaN
+/// included). On the x86-64 baseline `f32::floor` is a libm call (its
+/// instruction needs SSE4.1), a percent of a light-mesh frame spent on
+/// the half-ball's box, the lamp disk's samples and the tile of a point.
+pub fn floor(v: Vec3) -> Vec3 {
+    Vec3::from_array(v.to_array().map(floor_f32))
+}
+
+/// ⌈v⌉ per axis, the very values `Vec3::ceil` gives; see [`floor`].
+pub fn ceil(v: Vec3) -> Vec3 {
+    Vec3::from_array(v.to_array().map(|x| -floor_f32(-x)))
+}
+
+/// `x.floor()` by truncation: below 2^23 in magnitude the cast to `i32`
+/// and back is exact, from there on every f32 is an integer (or infinite,
+/// or NaN) and is its own floor. The sign is put back for −0, the one
+/// input whose floor truncation gets wrong besides the negatives it
+/// corrects by one.
+fn floor_f32(x: f32) -> f32 {
+    if x.is_nan() || x.abs() >= 8_388_608.0 {
+        return x;
+    }
+    let truncated = x as i32 as f32;
+    let floor = match truncated > x {
+        true => truncated - 1.0,
+        false => truncated,
+    };
+    floor.copysign(x)
+}
+
 /// Most nodes along one axis of a half-ball's box.
 pub(crate) const MAX_SPAN: usize = 2 * MAX_KI as usize + 1;
 /// [`MAX_SPAN`] rounded up to whole rows of eight SIMD lanes.
@@ -113,8 +143,8 @@ impl Lattice {
             reach <= MAX_KI,
             "half-ball radius of {reach} steps; at most {MAX_KI}"
         );
-        let low = (local - Vec3::splat(reach)).ceil().as_ivec3();
-        let high = (local + Vec3::splat(reach)).floor().as_ivec3();
+        let low = ceil(local - Vec3::splat(reach)).as_ivec3();
+        let high = floor(local + Vec3::splat(reach)).as_ivec3();
         let radius_squared = radius * radius;
         let on_plane = self.on_plane_tolerance(p, radius);
         // Offsets per axis, computed once: `node_position(node) - p` for
@@ -169,6 +199,56 @@ impl Lattice {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The lattice's floor and ceiling are std's, bit for bit, at every
+    /// kind of f32: zeros of both signs, halves, just below and above
+    /// integers, the last fractions below 2^23, integers beyond, the
+    /// largest values, infinities and NaN.
+    #[test]
+    fn floor_and_ceil_are_std_bit_for_bit() {
+        let mut values = vec![
+            0.0f32,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            0.999_999_94,
+            -0.999_999_94,
+            1e-45,
+            -1e-45,
+            1e-30,
+            -1e-30,
+            8_388_607.5,
+            -8_388_607.5,
+            8_388_608.0,
+            -8_388_608.0,
+            16_777_217.0,
+            3e9,
+            -3e9,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            2.5e-8,
+            -123.456,
+        ];
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..100_000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            values.push(f32::from_bits(state as u32));
+            values.push((state as i32 as f32) / 1024.0);
+        }
+        for x in values {
+            let v = Vec3::splat(x);
+            let same =
+                |a: Vec3, b: Vec3| (a.x.is_nan() && b.x.is_nan()) || a.x.to_bits() == b.x.to_bits();
+            assert!(same(floor(v), v.floor()), "floor of {x:e}");
+            assert!(same(ceil(v), v.ceil()), "ceil of {x:e}");
+        }
+    }
 
     fn count(lattice: &Lattice, p: Vec3, n: Vec3, radius: f32) -> usize {
         let mut nodes = Vec::new();
