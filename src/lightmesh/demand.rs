@@ -168,26 +168,21 @@ impl Walk {
             self.flush(tables);
             self.lights.copy_from_slice(lights);
         }
-        for &row in &self.rows {
+        for index in 0..self.rows.len() {
             if self.gathered.is_full() {
-                flush(&mut self.gathered, tables, self.steps, &self.lights);
+                self.flush(tables);
             }
-            self.gathered.add(row);
+            self.gathered.add(self.rows[index]);
         }
     }
 
     /// Asks the tables for what is gathered, and starts again: at a change
-    /// of lights, and after the chunk's last point.
+    /// of lights, when the gathering is full, and after the chunk's last
+    /// point.
     fn flush(&mut self, tables: &mut BrickTables) {
-        flush(&mut self.gathered, tables, self.steps, &self.lights);
-    }
-}
-
-/// Asks `tables` for `lights` at the nodes `gathered` holds, on a lattice
-/// of `steps` mesh steps, and empties it.
-fn flush(gathered: &mut Windows, tables: &mut BrickTables, steps: i32, lights: &[u64]) {
-    for row in gathered.drain() {
-        tables.need_row(row, steps, lights);
+        for row in self.gathered.drain() {
+            tables.need_row(row, self.steps, &self.lights);
+        }
     }
 }
 
