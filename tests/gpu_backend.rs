@@ -741,10 +741,11 @@ fn camera_and_secondary_rays(
     world: &World,
     (width, height): (u32, u32),
 ) -> Vec<Ray> {
+    let film_rays = placed.camera.film(width, height);
     let mut rays: Vec<Ray> = (0..width * height)
         .map(|i| {
             let film = Vec2::new((i % width) as f32 + 0.5, (i / width) as f32 + 0.5);
-            placed.camera.primary_ray(film, width, height)
+            film_rays.through(film)
         })
         .collect();
     let secondary: Vec<Ray> = (rays.iter())

@@ -236,11 +236,12 @@ impl BandSamples {
     ) -> BandSamples {
         let samples = ((rows.end - rows.start) * job.width * job.spp) as usize;
         let mut first_hits = vec![FirstHit::MISS; samples];
+        let rays = job.frame.camera.film(job.width, job.height);
         for point in &points[..primary] {
             let pixel = point.sample / job.spp;
             let (x, y) = (pixel % job.width, rows.start + pixel / job.width);
             let film = film_position(UVec2::new(x, y), job.width, point.sample % job.spp, job.spp);
-            let ray = job.frame.camera.primary_ray(film, job.width, job.height);
+            let ray = rays.through(film);
             first_hits[point.sample as usize] = FirstHit {
                 covered: true,
                 albedo: point.material.base_color,

@@ -465,6 +465,7 @@ fn primary_hits(job: &FrameJob, rows: std::ops::Range<u32>) -> Vec<ShadingPoint>
                 .map(move |x| UVec2::new(x, y))
         })
         .collect();
+    let rays = job.frame.camera.film(job.width, job.height);
     let per_tile: Vec<Vec<ShadingPoint>> = tiles
         .par_iter()
         .map(|&corner| {
@@ -473,7 +474,7 @@ fn primary_hits(job: &FrameJob, rows: std::ops::Range<u32>) -> Vec<ShadingPoint>
                 for x in corner.x..(corner.x + TILE).min(job.width) {
                     for s in 0..job.spp {
                         let film = film_position(UVec2::new(x, y), job.width, s, job.spp);
-                        let ray = job.frame.camera.primary_ray(film, job.width, job.height);
+                        let ray = rays.through(film);
                         let sample = ((y - rows.start) * job.width + x) * job.spp + s;
                         points.extend(trace(job, &ray, sample, Vec3::ONE, 0));
                     }

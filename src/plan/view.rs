@@ -120,7 +120,7 @@ fn in_view_cone(placed: &FrameScene, settings: &Settings, bounds: &Bounds) -> bo
         return true;
     };
     // The camera keeps the vertical field of view and follows the image's
-    // aspect (`RenderCamera::primary_ray`).
+    // aspect (`RenderCamera::film`).
     let aspect = f64::from(settings.width) / f64::from(settings.height);
     let tan_half = (0.5 * f64::from(yfov)).tan();
     let half_angle = (tan_half * (1.0 + aspect * aspect).sqrt()).atan() + CONE_MARGIN;

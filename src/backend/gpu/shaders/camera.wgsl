@@ -1,5 +1,5 @@
 // The camera's rays of a band of pixel samples (`backend/sampling.rs`'s
-// `film_position`, `render/camera.rs`'s `primary_ray`): pixel centres at
+// `film_position`, `render/camera.rs`'s `FilmRays::through`): pixel centres at
 // one sample per pixel, else jittered strata from a PCG32 seeded by the
 // sample's index in the image, which is emulated here in 32-bit words so
 // that the GPU draws the CPU's numbers.
