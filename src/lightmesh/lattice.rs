@@ -27,13 +27,16 @@ pub const MAX_KI: f32 = 8.0;
 /// included). On the x86-64 baseline `f32::floor` is a libm call (its
 /// instruction needs SSE4.1), a percent of a light-mesh frame spent on
 /// the half-ball's box, the lamp disk's samples and the tile of a point.
+///
+/// Written per axis rather than with `array::map`, whose closures one
+/// build left as calls on a hot path (`accel::wide::WideNode::child_box`).
 pub fn floor(v: Vec3) -> Vec3 {
-    Vec3::from_array(v.to_array().map(floor_f32))
+    Vec3::new(floor_f32(v.x), floor_f32(v.y), floor_f32(v.z))
 }
 
 /// ⌈v⌉ per axis, the very values `Vec3::ceil` gives; see [`floor`].
 pub fn ceil(v: Vec3) -> Vec3 {
-    Vec3::from_array(v.to_array().map(|x| -floor_f32(-x)))
+    -floor(-v)
 }
 
 /// `x.floor()` by truncation: below 2^23 in magnitude the cast to `i32`
