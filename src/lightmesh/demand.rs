@@ -4,12 +4,12 @@
 //! Neighbouring points share most of their nodes; OR-ing into a brick-shaped
 //! table merges them without sorting millions of entries.
 
-use glam::IVec3;
+use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
 use super::faint::LampTerms;
-use super::lattice::Row;
+use super::lattice::{Lattice, Row, Spread};
 use super::masks::{parity, split, BRICK_NODES};
 use super::wide_ball::{self, WideBall};
 use super::{LightMesh, LightMeshError};
@@ -136,8 +136,12 @@ impl BrickTables {
 /// Points with other lights start a new gathering, so no node is ever
 /// asked for a light a point of its own did not need.
 struct Walk {
-    /// Mesh steps per step of the walk's lattice.
+    /// The half-ball walked: its lattice, whose node i is the mesh's
+    /// i·`steps`, and its radius.
+    lattice: Lattice,
+    radius: f32,
     steps: i32,
+    run: Run,
     rows: Vec<Row>,
     gathered: Windows,
     /// The lights the gathered nodes are needed for.
@@ -145,16 +149,50 @@ struct Walk {
 }
 
 impl Walk {
-    fn new(steps: i32, words: usize) -> Walk {
+    fn new((lattice, radius): (Lattice, f32), steps: i32, words: usize) -> Walk {
         Walk {
+            lattice,
+            radius,
             steps,
+            run: Run::new(words),
             rows: Vec::new(),
             gathered: Windows::new(),
             lights: vec![0; words],
         }
     }
 
-    /// The point's rows go here.
+    /// Needs `lights` at the nodes of the half-ball of the point at `p`
+    /// with normal `n`: through the run it joins, or one it starts.
+    fn add(&mut self, tables: &mut BrickTables, (p, n): (Vec3, Vec3), lights: &[u64]) {
+        if !(self.run).joins(&self.lattice, self.radius, (p, n), lights) {
+            self.ask_run(tables);
+            self.run.start((p, n), lights);
+        }
+    }
+
+    /// Asks the tables for everything added: after the chunk's last point.
+    fn finish(&mut self, tables: &mut BrickTables) {
+        self.ask_run(tables);
+        self.flush(tables);
+    }
+
+    /// Needs the run's lights at the rows that hold its points' half-balls.
+    fn ask_run(&mut self, tables: &mut BrickTables) {
+        let Some((p, n, spread)) = self.run.end() else {
+            return;
+        };
+        let (lattice, radius) = (self.lattice, self.radius);
+        let rows = self.start();
+        match spread == Spread::default() {
+            true => lattice.half_ball_rows(p, n, radius, |row| rows.push(row)),
+            false => lattice.spread_half_ball_rows(p, n, radius, spread, |row| rows.push(row)),
+        }
+        let lights = std::mem::take(&mut self.run.lights);
+        self.need(tables, &lights);
+        self.run.lights = lights;
+    }
+
+    /// The rows to gather next go here.
     fn start(&mut self) -> &mut Vec<Row> {
         self.rows.clear();
         &mut self.rows
@@ -183,6 +221,81 @@ impl Walk {
         for row in self.gathered.drain() {
             tables.need_row(row, self.steps, &self.lights);
         }
+    }
+}
+
+/// How far a point may lie from a run's first point to join it ([`Run`]),
+/// in steps of the walk's lattice.
+const RUN_STEPS: f32 = 0.5;
+/// How far it may lie from the first point's plane, in the same steps:
+/// points of one flat triangle lie on it to rounding.
+const RUN_PLANE_STEPS: f32 = 1.0 / 32.0;
+
+/// Consecutive points whose half-balls one walk covers. Beside each other
+/// on a plane, points' sets hold nearly the same nodes: on the 64-lamp
+/// street at 1920×1080, of the points that ask their wide set, two in
+/// three lie within a mesh step (half a step of its lattice) of the last
+/// point that began a run, with its normal and its lamps, and one in two
+/// within half a mesh step. Such a point joins that run instead of walking
+/// its own set, and the run asks once for the rows of the ball grown to
+/// hold all of its points' sets ([`Lattice::spread_half_ball_rows`]). That needs
+/// every node each point's own set would, and a rim beyond: bits filled
+/// that no point of the frame reads, which cannot change an image (a frame
+/// that reuses masks holds more still). A run of one point asks for its
+/// own set alone.
+struct Run {
+    /// The first point's position and normal; None between runs.
+    first: Option<(Vec3, Vec3)>,
+    lights: Vec<u64>,
+    spread: Spread,
+}
+
+impl Run {
+    fn new(words: usize) -> Run {
+        Run {
+            first: None,
+            lights: vec![0; words],
+            spread: Spread::default(),
+        }
+    }
+
+    /// Whether the point at `p` with normal `n`, needing `lights` of the
+    /// half-ball of `radius` on `lattice`, joined the run: it has the
+    /// run's normal and lights, and lies near enough to its first point
+    /// for the grown ball to hold.
+    fn joins(
+        &mut self,
+        lattice: &Lattice,
+        radius: f32,
+        (p, n): (Vec3, Vec3),
+        lights: &[u64],
+    ) -> bool {
+        let Some((first, normal)) = self.first else {
+            return false;
+        };
+        if normal != n || self.lights != lights {
+            return false;
+        }
+        let spread = self.spread.holding(first, n, p);
+        let joins = spread.distance <= RUN_STEPS * lattice.h
+            && spread.offset <= RUN_PLANE_STEPS * lattice.h
+            && spread.fits(lattice, first, radius);
+        if joins {
+            self.spread = spread;
+        }
+        joins
+    }
+
+    /// A new run from the point at `p` with normal `n`.
+    fn start(&mut self, (p, n): (Vec3, Vec3), lights: &[u64]) {
+        self.first = Some((p, n));
+        self.lights.copy_from_slice(lights);
+        self.spread = Spread::default();
+    }
+
+    /// The run's first point and spread, ending it.
+    fn end(&mut self) -> Option<(Vec3, Vec3, Spread)> {
+        self.first.take().map(|(p, n)| (p, n, self.spread))
     }
 }
 
@@ -313,8 +426,10 @@ impl LightMesh {
             .try_fold(
                 || BrickTables::new(words),
                 |mut tables, ((chunk, chunk_reach), chunk_faint)| {
-                    let mut half_ball = Walk::new(1, words);
-                    let mut wide_set = Walk::new(wide_ball::STEPS, words);
+                    let mut half_ball = Walk::new((self.lattice, self.radius()), 1, words);
+                    let mut wide_set = wide.map(|ball| {
+                        Walk::new((ball.lattice, ball.radius), wide_ball::STEPS, words)
+                    });
                     let mut lamps_reached = vec![0; words];
                     let per_point = chunk_reach.chunks(words).zip(chunk_faint.chunks(words));
                     for (point, (point_reach, point_faint)) in chunk.iter().zip(per_point) {
@@ -322,11 +437,8 @@ impl LightMesh {
                             continue;
                         }
                         let (p, n) = (point.position, point.geometric_normal);
-                        let rows = half_ball.start();
-                        self.lattice
-                            .half_ball_rows(p, n, self.radius(), |row| rows.push(row));
-                        half_ball.need(&mut tables, point_reach);
-                        let Some(ball) = &wide else {
+                        half_ball.add(&mut tables, (p, n), point_reach);
+                        let Some(wide_set) = &mut wide_set else {
                             continue;
                         };
                         for (reached, ((&reach, &lamp), &faint)) in lamps_reached
@@ -338,12 +450,12 @@ impl LightMesh {
                         if lamps_reached.iter().all(|&word| word == 0) {
                             continue;
                         }
-                        let rows = wide_set.start();
-                        ball.rows(p, n, |row| rows.push(row));
-                        wide_set.need(&mut tables, &lamps_reached);
+                        wide_set.add(&mut tables, (p, n), &lamps_reached);
                     }
-                    half_ball.flush(&mut tables);
-                    wide_set.flush(&mut tables);
+                    half_ball.finish(&mut tables);
+                    if let Some(wide_set) = &mut wide_set {
+                        wide_set.finish(&mut tables);
+                    }
                     match tables.bricks.len() {
                         count if count > brick_limit => Err(too_large(count)),
                         _ => Ok(tables),
@@ -428,7 +540,7 @@ mod tests {
             let words = 2;
             let mut row_by_row = BrickTables::new(words);
             let mut gathered = BrickTables::new(words);
-            let mut walk = Walk::new(steps, words);
+            let mut walk = Walk::new((Lattice::new(0.1), 0.25), steps, words);
             for (rows, lights) in &points {
                 let rows: Vec<Row> = (rows.iter())
                     .map(|&((x, y, z), lanes)| Row { first: IVec3::new(x, y, z), lanes })
@@ -442,6 +554,99 @@ mod tests {
             walk.flush(&mut gathered);
             prop_assert_eq!(sorted(gathered), sorted(row_by_row));
         }
+    }
+
+    /// Each point's half-ball, for its lights, and its wide set, for its
+    /// lamps, are needed where points form runs (a row of them a fraction
+    /// of a step apart on a floor) and where they do not (far apart, a
+    /// wall's normal between the floor's): the runs' grown balls hold every
+    /// node, and add only a rim.
+    #[test]
+    fn runs_need_every_node_of_their_points_sets() {
+        use crate::lightmesh::masks::join;
+        use crate::lightmesh::penumbra::Penumbra;
+        use crate::render::light::{LightSource, RenderLight};
+        use crate::render::material::SurfaceMaterial;
+        use std::collections::HashSet;
+
+        let lamp = |x: f32, z: f32| RenderLight {
+            source: LightSource::Point {
+                position: Vec3::new(x, 3.0, z),
+            },
+            power: Vec3::splat(50.0),
+            range: None,
+            lamp_radius: 0.2,
+        };
+        let lights = [lamp(-2.0, 0.5), lamp(1.0, -1.0), lamp(4.0, 2.0)];
+        let mut mesh = LightMesh::new(Lattice::new(0.1), 2.5, lights.len(), 1 << 30);
+        mesh.penumbra = Penumbra::Wide;
+        let point = |position: Vec3, normal: Vec3| ShadingPoint {
+            sample: 0,
+            weight: Vec3::ONE,
+            depth: 0,
+            position,
+            geometric_normal: normal,
+            shading_normal: normal,
+            front_face: true,
+            view: Vec3::Y,
+            material: SurfaceMaterial {
+                base_color: Vec3::splat(0.5),
+                metallic: 0.0,
+                roughness: 0.5,
+                specular: 0.5,
+                transmission: 0.0,
+                ior: 1.5,
+                emissive: Vec3::ZERO,
+            },
+        };
+        let mut points = Vec::new();
+        for i in 0..120 {
+            let x = -1.5 + 0.031 * i as f32;
+            points.push(point(Vec3::new(x, 0.0, 0.013 * (i % 4) as f32), Vec3::Y));
+            if i % 10 == 0 {
+                points.push(point(Vec3::new(2.0, 0.5 + 0.02 * i as f32, x), Vec3::X));
+                points.push(point(Vec3::new(3.0 * x, 0.0, 5.0), Vec3::Y));
+            }
+        }
+        let demand = mesh.demand(&points, &LightLanes::new(&lights)).unwrap();
+        let needed = |node: IVec3| {
+            let (brick, slot) = split(node);
+            (demand
+                .bricks
+                .binary_search_by_key(&brick.to_array(), |b| b.brick.to_array()))
+            .map_or(0, |at| demand.bricks[at].needed[slot])
+        };
+        let ball = WideBall::of(&mesh);
+        let lamps = wide_ball::lamps(&lights, 1);
+        let (mut wide_sets, mut half_balls) = (HashSet::new(), HashSet::new());
+        for (index, point) in points.iter().enumerate() {
+            let (reach, faint) = demand.of_point(index);
+            let asked = reach[0] & lamps[0] & !faint[0];
+            assert_ne!(asked, 0, "point {index} asks no lamp");
+            let (p, n) = (point.position, point.geometric_normal);
+            let mut nodes = Vec::new();
+            ball.nodes(p, n, &mut nodes);
+            for node in nodes {
+                assert_eq!(needed(node) & asked, asked, "{node} of point {index}");
+                wide_sets.insert(node);
+            }
+            let mut own = Vec::new();
+            mesh.lattice.half_ball(p, n, mesh.radius(), &mut own);
+            for node in own {
+                assert_eq!(needed(node) & reach[0], reach[0], "{node} of point {index}");
+                half_balls.insert(node);
+            }
+        }
+        let rim = (demand.bricks.iter())
+            .flat_map(|brick| (0..BRICK_NODES).map(move |slot| join(brick.brick, slot)))
+            .filter(|node| needed(*node) != 0 && !wide_sets.contains(node))
+            .filter(|node| !half_balls.contains(node))
+            .count();
+        assert!(
+            rim > 0 && rim < wide_sets.len() / 4,
+            "{rim} nodes needed beyond the {} of the points' wide sets",
+            wide_sets.len()
+        );
     }
 
     #[test]

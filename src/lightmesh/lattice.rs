@@ -139,7 +139,36 @@ impl Lattice {
     /// `visit` gets each row along x that holds some. Where a caller
     /// handles a row as a whole (one brick lookup for its nodes), this
     /// spares it a list of nodes.
-    pub fn half_ball_rows(&self, p: Vec3, n: Vec3, radius: f32, mut visit: impl FnMut(Row)) {
+    pub fn half_ball_rows(&self, p: Vec3, n: Vec3, radius: f32, visit: impl FnMut(Row)) {
+        let on_plane = self.on_plane_tolerance(p, radius);
+        self.rows_in_front(p, n, radius, on_plane, visit);
+    }
+
+    /// Rows holding every node of the half-balls of radius `radius` of the
+    /// points `q` with normal `n` that lie within `spread` of `p`: the ball
+    /// about `p` grown by the distance, its plane lowered by the offset,
+    /// both with a margin for rounding that outgrows the coordinates' (see
+    /// [`Spread::grown`]). Demand walks this once for a run of such points
+    /// instead of each one's half-ball: it needs more nodes than they do
+    /// (their union's rim, a thin layer behind the plane), never fewer.
+    ///
+    /// Where that ball would exceed [`MAX_KI`] steps, [`Spread::fits`]
+    /// said no such run forms.
+    pub fn spread_half_ball_rows(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        radius: f32,
+        spread: Spread,
+        visit: impl FnMut(Row),
+    ) {
+        let (grown, plane) = spread.grown(self, p, radius);
+        self.rows_in_front(p, n, grown, plane, visit);
+    }
+
+    /// The rows of nodes `x` with |x − p| ≤ `radius` and (n, x − p) >
+    /// `plane`, in [`Lattice::half_ball`]'s order.
+    fn rows_in_front(&self, p: Vec3, n: Vec3, radius: f32, plane: f32, mut visit: impl FnMut(Row)) {
         let local = self.local(p);
         let reach = radius / self.h;
         assert!(
@@ -149,7 +178,6 @@ impl Lattice {
         let low = ceil(local - Vec3::splat(reach)).as_ivec3();
         let high = floor(local + Vec3::splat(reach)).as_ivec3();
         let radius_squared = radius * radius;
-        let on_plane = self.on_plane_tolerance(p, radius);
         // Offsets per axis, computed once: `node_position(node) - p` for
         // each coordinate, exactly as a per-node evaluation would round it.
         // Slots past the span stay infinite: no ball holds them.
@@ -175,7 +203,7 @@ impl Lattice {
             (dx * dx, f32x8::splat(n.x) * dx)
         });
         let radius_lanes = f32x8::splat(radius_squared);
-        let on_plane_lanes = f32x8::splat(on_plane);
+        let plane_lanes = f32x8::splat(plane);
         for (kz, &dz) in z[..span(low.z, high.z)].iter().enumerate() {
             for (jy, &dy) in y[..span(low.y, high.y)].iter().enumerate() {
                 // (x² + y²) + z² ≥ y² + z² in rounded arithmetic too: a row
@@ -187,7 +215,7 @@ impl Lattice {
                 let (ny, nz) = (f32x8::splat(n.y * dy), f32x8::splat(n.z * dz));
                 for (block, &(dx2, nx)) in x_lanes[..x_blocks].iter().enumerate() {
                     let inside = (dx2 + dy2 + dz2).simd_le(radius_lanes)
-                        & (nx + ny + nz).simd_gt(on_plane_lanes);
+                        & (nx + ny + nz).simd_gt(plane_lanes);
                     let lanes = inside.to_bitmask() as u8;
                     if lanes != 0 {
                         let first = low + IVec3::new((block * 8) as i32, jy as i32, kz as i32);
@@ -196,6 +224,51 @@ impl Lattice {
                 }
             }
         }
+    }
+}
+
+/// How far the points of a run lie from its first point `p` (all with its
+/// normal n): the largest |q − p| and |(n, q − p)|.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Spread {
+    pub distance: f32,
+    pub offset: f32,
+}
+
+/// The rounding allowance of [`Spread::grown`], relative to the grown
+/// radius: far above the few ULPs by which a point's rounded distances and
+/// dot products can differ from the leader's (ten or so epsilons).
+const SPREAD_MARGIN: f32 = 1e-5;
+
+impl Spread {
+    /// The spread that also holds `q`, a point with the leader's normal.
+    pub fn holding(self, p: Vec3, n: Vec3, q: Vec3) -> Spread {
+        Spread {
+            distance: self.distance.max((q - p).length()),
+            offset: self.offset.max(n.dot(q - p).abs()),
+        }
+    }
+
+    /// The grown radius and the lowered plane of
+    /// [`Lattice::spread_half_ball_rows`] about `p`. A node of a run
+    /// point's half-ball is within `radius` of it and in front of its plane
+    /// as rounded; so it is within `radius + distance` of `p` and above
+    /// `−offset` from p's plane, up to the rounding of both points'
+    /// offsets and of their box of nodes (steps from the origin, whose
+    /// error grows with the coordinates). Twice
+    /// [`Lattice::on_plane_tolerance`] covers the latter, and
+    /// [`SPREAD_MARGIN`] the former.
+    fn grown(self, lattice: &Lattice, p: Vec3, radius: f32) -> (f32, f32) {
+        let reach = radius + self.distance;
+        let absolute = 2.0 * lattice.on_plane_tolerance(p, reach);
+        let grown = reach * (1.0 + SPREAD_MARGIN) + absolute;
+        let plane = -(self.offset * (1.0 + SPREAD_MARGIN) + SPREAD_MARGIN * grown + absolute);
+        (grown, plane)
+    }
+
+    /// Whether the grown ball about `p` stays within [`MAX_KI`] steps.
+    pub fn fits(self, lattice: &Lattice, p: Vec3, radius: f32) -> bool {
+        self.grown(lattice, p, radius).0 / lattice.h <= MAX_KI
     }
 }
 
@@ -330,6 +403,62 @@ mod tests {
                 }
             }
             proptest::prop_assert_eq!(nodes, brute);
+        }
+    }
+
+    proptest::proptest! {
+        /// A run's grown ball holds every node of each of its points'
+        /// half-balls: points scattered within the spread of the first, on
+        /// its plane to rounding or just off it, at coordinates up to 1e5
+        /// steps from the origin (where the node positions' rounding is
+        /// a fair part of a step), on the lattice's nodes and planes, with
+        /// normals along the axes, grazing them and anywhere.
+        #[test]
+        fn a_spread_ball_holds_every_run_points_half_ball(
+            first in proptest::array::uniform3(-1.0f32..1.0),
+            scale in proptest::sample::select(vec![4.0f32, 40.0, 4e3, 1e5]),
+            n in proptest::array::uniform3(-1.0f32..1.0),
+            normal in 0..3,
+            on_lattice in proptest::bool::ANY,
+            ki in 1.0f32..6.0,
+            along in proptest::collection::vec(
+                (proptest::array::uniform3(-1.0f32..1.0), -1.0f32..1.0),
+                1..8,
+            ),
+        ) {
+            let h = 0.1;
+            let lattice = match on_lattice {
+                true => Lattice { origin: Vec3::ZERO, h },
+                false => Lattice::new(h),
+            };
+            let mut p = Vec3::from(first) * scale * h;
+            let n = match normal {
+                0 => Vec3::from(n).round().normalize_or(Vec3::Y),
+                1 => Vec3::new(1.0, 1e-3, 0.0).normalize(),
+                _ => Vec3::from(n).normalize_or(Vec3::Y),
+            };
+            if on_lattice {
+                p = lattice.node_position(lattice.local(p).round().as_ivec3());
+            }
+            let radius = ki * h;
+            let mut spread = Spread::default();
+            let mut points = vec![p];
+            for (offset, off_plane) in along {
+                let tangent = Vec3::from(offset) - n * n.dot(Vec3::from(offset));
+                let q = p + tangent * h + n * (off_plane * h / 16.0);
+                spread = spread.holding(p, n, q);
+                points.push(q);
+            }
+            proptest::prop_assume!(spread.fits(&lattice, p, radius));
+            let mut grown = Vec::new();
+            lattice.spread_half_ball_rows(p, n, radius, spread, |row| grown.extend(row.nodes()));
+            for q in points {
+                let mut own = Vec::new();
+                lattice.half_ball(q, n, radius, &mut own);
+                for node in own {
+                    proptest::prop_assert!(grown.contains(&node), "{node} of {q} missing");
+                }
+            }
         }
     }
 

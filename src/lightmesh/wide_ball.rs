@@ -5,7 +5,7 @@
 
 use glam::{IVec3, Vec3};
 
-use super::lattice::{Lattice, Row, MAX_NODE_COORDINATE};
+use super::lattice::{Lattice, MAX_NODE_COORDINATE};
 use super::LightMesh;
 use crate::render::light::RenderLight;
 
@@ -38,12 +38,6 @@ impl WideBall {
             lattice,
             radius: ki * lattice.h,
         }
-    }
-
-    /// The nodes of [`WideBall::nodes`] a row at a time, in coordinates of
-    /// the wide set's lattice: a mesh node is one of them times [`STEPS`].
-    pub fn rows(&self, p: Vec3, n: Vec3, visit: impl FnMut(Row)) {
-        self.lattice.half_ball_rows(p, n, self.radius, visit);
     }
 
     /// Appends to `out` the mesh nodes of the wide half-ball of the point
