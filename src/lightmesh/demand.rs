@@ -566,7 +566,6 @@ mod tests {
         use crate::lightmesh::masks::join;
         use crate::lightmesh::penumbra::Penumbra;
         use crate::render::light::{LightSource, RenderLight};
-        use crate::render::material::SurfaceMaterial;
         use std::collections::HashSet;
 
         let lamp = |x: f32, z: f32| RenderLight {
@@ -580,25 +579,7 @@ mod tests {
         let lights = [lamp(-2.0, 0.5), lamp(1.0, -1.0), lamp(4.0, 2.0)];
         let mut mesh = LightMesh::new(Lattice::new(0.1), 2.5, lights.len(), 1 << 30);
         mesh.penumbra = Penumbra::Wide;
-        let point = |position: Vec3, normal: Vec3| ShadingPoint {
-            sample: 0,
-            weight: Vec3::ONE,
-            depth: 0,
-            position,
-            geometric_normal: normal,
-            shading_normal: normal,
-            front_face: true,
-            view: Vec3::Y,
-            material: SurfaceMaterial {
-                base_color: Vec3::splat(0.5),
-                metallic: 0.0,
-                roughness: 0.5,
-                specular: 0.5,
-                transmission: 0.0,
-                ior: 1.5,
-                emissive: Vec3::ZERO,
-            },
-        };
+        let point = ShadingPoint::matte;
         let mut points = Vec::new();
         for i in 0..120 {
             let x = -1.5 + 0.031 * i as f32;

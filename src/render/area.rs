@@ -199,30 +199,6 @@ impl Cone {
 mod tests {
     use super::*;
     use crate::render::light::LightSource;
-    use crate::render::material::SurfaceMaterial;
-
-    fn lambert_point(position: Vec3, normal: Vec3) -> ShadingPoint {
-        let material = SurfaceMaterial {
-            base_color: Vec3::splat(0.5),
-            metallic: 0.0,
-            roughness: 1.0,
-            specular: 0.0,
-            transmission: 0.0,
-            ior: 1.5,
-            emissive: Vec3::ZERO,
-        };
-        ShadingPoint {
-            sample: 0,
-            weight: Vec3::ONE,
-            depth: 0,
-            position,
-            geometric_normal: normal,
-            shading_normal: normal,
-            front_face: true,
-            view: normal,
-            material,
-        }
-    }
 
     fn lamp(position: Vec3, radius: f32) -> RenderLight {
         RenderLight {
@@ -291,7 +267,7 @@ mod tests {
 
     #[test]
     fn a_far_small_lamp_delivers_the_point_lights_irradiance() {
-        let point = lambert_point(Vec3::ZERO, Vec3::Y);
+        let point = ShadingPoint::matte(Vec3::ZERO, Vec3::Y);
         let centre = Vec3::new(0.0, 3.0, 0.0);
         let expected = point.omega(&lamp(centre, 0.0)).unwrap();
         let n = 16;
@@ -311,7 +287,7 @@ mod tests {
 
     #[test]
     fn spot_cone_and_range_scale_the_whole_lamp_from_its_centre() {
-        let point = lambert_point(Vec3::ZERO, Vec3::Y);
+        let point = ShadingPoint::matte(Vec3::ZERO, Vec3::Y);
         let centre = Vec3::new(0.0, 2.0, 0.0);
         let spot = |axis: Vec3, range: Option<f32>| RenderLight {
             source: LightSource::Spot {
@@ -355,7 +331,7 @@ mod tests {
             (centre, Vec3::Y),
         ];
         for (position, normal) in cases {
-            let point = lambert_point(position, normal);
+            let point = ShadingPoint::matte(position, normal);
             for u in grid(11) {
                 if let Some(sample) = sample_light(&point, &lamp(centre, radius), u) {
                     assert!(sample.value.is_finite(), "{position} {u}: {}", sample.value);

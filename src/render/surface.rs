@@ -42,6 +42,31 @@ impl ShadingPoint {
         PointBrdf::new(&self.material, self.shading_normal, self.view)
     }
 
+    /// A primary hit on grey Lambertian matter, seen along its normal:
+    /// what tests of lights and of the light mesh's sets ask of a point.
+    #[cfg(test)]
+    pub fn matte(position: Vec3, normal: Vec3) -> ShadingPoint {
+        ShadingPoint {
+            sample: 0,
+            weight: Vec3::ONE,
+            depth: 0,
+            position,
+            geometric_normal: normal,
+            shading_normal: normal,
+            front_face: true,
+            view: normal,
+            material: SurfaceMaterial {
+                base_color: Vec3::splat(0.5),
+                metallic: 0.0,
+                roughness: 1.0,
+                specular: 0.0,
+                transmission: 0.0,
+                ior: 1.5,
+                emissive: Vec3::ZERO,
+            },
+        }
+    }
+
     pub fn from_hit(
         scene: &SceneDesc,
         frame: &FrameScene,
