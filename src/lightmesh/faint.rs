@@ -75,6 +75,9 @@ pub struct FaintLamps {
     brightest: u32,
     /// Per bucket, its lamps' significands summed, saturating.
     buckets: [u32; BUCKETS],
+    /// The faintest bucket a lamp is in: those past it are empty, so the
+    /// rule's loops stop there.
+    faintest: u32,
 }
 
 impl FaintLamps {
@@ -84,6 +87,7 @@ impl FaintLamps {
         FaintLamps {
             brightest,
             buckets: [0; BUCKETS],
+            faintest: 0,
         }
     }
 
@@ -98,19 +102,24 @@ impl FaintLamps {
         let bucket = (self.brightest - exponent).min(LAST_BUCKET);
         let into = &mut self.buckets[bucket as usize];
         *into = into.saturating_add(sum);
+        self.faintest = self.faintest.max(bucket);
     }
 
     /// The first bucket whose lamps are faint under the budget of
     /// `parts` ([`budget_parts`]): a lamp is faint where its bucket is at
-    /// least this; [`NO_FAINT_BUCKET`] where none is.
+    /// least this; [`NO_FAINT_BUCKET`] where none is. An empty bucket
+    /// adds nothing to the light or to what is skipped, so the loops stop
+    /// at the faintest lamp's bucket: every bucket past it is skipped
+    /// within any budget.
     pub fn faintest_kept(&self, parts: u32) -> u32 {
-        let light = (0..LAST_BUCKET)
+        let faintest = self.faintest;
+        let light = (0..=faintest.min(LAST_BUCKET - 1))
             .map(|bucket| self.buckets[bucket as usize] >> bucket)
             .fold(0u32, u32::saturating_add);
         let budget = (light >> BUDGET_BITS) * parts;
         let mut skipped = 0u32;
-        let mut first_faint = NO_FAINT_BUCKET;
-        for bucket in (1..=LAST_BUCKET).rev() {
+        let mut first_faint = faintest + 1;
+        for bucket in (1..=faintest).rev() {
             skipped = skipped.saturating_add(rounded_up(self.buckets[bucket as usize], bucket));
             if skipped > budget {
                 break;
@@ -234,10 +243,34 @@ mod tests {
         let mut lamps = FaintLamps::brightest(brightest);
         (terms.iter()).for_each(|&term| lamps.add_sum(exponent(term), significand(term)));
         let first = lamps.faintest_kept(budget_parts(share));
+        assert_eq!(
+            first,
+            faintest_kept_over_every_bucket(&lamps, budget_parts(share))
+        );
         let bucket = |term: f32| (brightest - exponent(term)).min(LAST_BUCKET);
         (terms.iter())
             .map(|&term| exponent(term) != 0 && bucket(term) >= first)
             .collect()
+    }
+
+    /// [`FaintLamps::faintest_kept`] as the module states the rule,
+    /// every bucket visited: what stopping at the faintest lamp's bucket
+    /// must not change.
+    fn faintest_kept_over_every_bucket(lamps: &FaintLamps, parts: u32) -> u32 {
+        let light = (0..LAST_BUCKET)
+            .map(|bucket| lamps.buckets[bucket as usize] >> bucket)
+            .fold(0u32, u32::saturating_add);
+        let budget = (light >> BUDGET_BITS) * parts;
+        let mut skipped = 0u32;
+        let mut first_faint = NO_FAINT_BUCKET;
+        for bucket in (1..=LAST_BUCKET).rev() {
+            skipped = skipped.saturating_add(rounded_up(lamps.buckets[bucket as usize], bucket));
+            if skipped > budget {
+                break;
+            }
+            first_faint = bucket;
+        }
+        first_faint
     }
 
     /// The faint flags [`LampTerms`] marks for `terms` (lamp i's term at
@@ -265,6 +298,14 @@ mod tests {
         assert_eq!(faint(&terms, 1.0 / 64.0), [false; 4]);
         // ε = 0 refines every lamp.
         assert_eq!(faint(&terms, 0.0), [false; 4]);
+    }
+
+    #[test]
+    fn the_faintest_lamps_own_light_counts_towards_the_budget() {
+        // Two lamps half as bright as the brightest bring half the light:
+        // exactly the largest share, counted with their own light.
+        assert_eq!(faint(&[1.0, 0.5, 0.5], MAX_FAINT_SHARE), [false, true, true]);
+        assert_eq!(faint(&[1.0, 0.5, 0.5, 0.5], MAX_FAINT_SHARE), [false; 4]);
     }
 
     #[test]
