@@ -253,24 +253,23 @@ mod tests {
             .collect()
     }
 
-    /// [`FaintLamps::faintest_kept`] as the module states the rule,
-    /// every bucket visited: what stopping at the faintest lamp's bucket
-    /// must not change.
+    /// [`FaintLamps::faintest_kept`] as the module states the rule, over
+    /// every bucket: the first faint bucket is the brightest one from
+    /// which every fainter bucket, rounded up, fits within the budget
+    /// (those sums only grow towards the brightest). What stopping at the
+    /// faintest lamp's bucket must not change.
     fn faintest_kept_over_every_bucket(lamps: &FaintLamps, parts: u32) -> u32 {
-        let light = (0..LAST_BUCKET)
-            .map(|bucket| lamps.buckets[bucket as usize] >> bucket)
-            .fold(0u32, u32::saturating_add);
+        let light_of = |bucket: u32| lamps.buckets[bucket as usize] >> bucket;
+        let light = (0..LAST_BUCKET).map(light_of).fold(0, u32::saturating_add);
         let budget = (light >> BUDGET_BITS) * parts;
-        let mut skipped = 0u32;
-        let mut first_faint = NO_FAINT_BUCKET;
-        for bucket in (1..=LAST_BUCKET).rev() {
-            skipped = skipped.saturating_add(rounded_up(lamps.buckets[bucket as usize], bucket));
-            if skipped > budget {
-                break;
-            }
-            first_faint = bucket;
-        }
-        first_faint
+        let skipped_from = |first: u32| {
+            (first..=LAST_BUCKET)
+                .map(|bucket| rounded_up(lamps.buckets[bucket as usize], bucket))
+                .fold(0, u32::saturating_add)
+        };
+        (1..=LAST_BUCKET)
+            .find(|&first| skipped_from(first) <= budget)
+            .unwrap_or(NO_FAINT_BUCKET)
     }
 
     /// The faint flags [`LampTerms`] marks for `terms` (lamp i's term at
@@ -304,7 +303,10 @@ mod tests {
     fn the_faintest_lamps_own_light_counts_towards_the_budget() {
         // Two lamps half as bright as the brightest bring half the light:
         // exactly the largest share, counted with their own light.
-        assert_eq!(faint(&[1.0, 0.5, 0.5], MAX_FAINT_SHARE), [false, true, true]);
+        assert_eq!(
+            faint(&[1.0, 0.5, 0.5], MAX_FAINT_SHARE),
+            [false, true, true]
+        );
         assert_eq!(faint(&[1.0, 0.5, 0.5, 0.5], MAX_FAINT_SHARE), [false; 4]);
     }
 
