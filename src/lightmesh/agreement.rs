@@ -17,8 +17,16 @@
 //! Only bits the fill computed count (a node's set holds only such bits for
 //! the point's lights), so a summary may see other points' bits: it can
 //! only make a point walk, never change what the point gets. Summaries are
-//! made as shading meets tiles, per thread and per frame (nothing is kept
-//! between frames, so cached frames stay equal to cold ones).
+//! made as shading meets tiles, per thread and per frame. A tile's own
+//! summary reads its 64 nodes' masks, the most of a summary's cost, and on
+//! a frame that reuses masks the same tiles are summarised again from the
+//! same bits. So those are remembered across frames and threads
+//! ([`TileMemo`]), each with the revision of the brick it was read from
+//! ([`MaskStore::brick_revision`]), which any edit of the brick's bits or
+//! flags changes: a remembered summary is the one the brick's masks give
+//! now, and cached frames stay equal to cold ones.
+//!
+//! [`MaskStore::brick_revision`]: super::masks::MaskStore::brick_revision
 //!
 //! A summary reads the masks of 27 tiles' nodes at the default kI (more
 //! for wider half-balls), a hundred times what one walk reads, so it pays
@@ -30,6 +38,8 @@
 //! [`POINTS_BEFORE_SUMMARY`]th point a thread meets in it; the ones before
 //! walk. Which points settle then depends on how threads share the frame,
 //! but not what any point gets.
+
+use std::sync::{Arc, RwLock};
 
 use glam::{IVec3, Vec3};
 use rustc_hash::FxHashMap;
@@ -80,13 +90,22 @@ pub struct Agreement {
     around: Summaries,
     /// Tiles points have met whose summary is not made yet, and how many.
     met: FxHashMap<IVec3, u32>,
+    /// Tiles' own summaries from earlier frames and other threads.
+    memo: Arc<TileMemo>,
 }
 
 impl Agreement {
     /// Summaries for half-balls of `radius` on `lattice`, a lattice of
     /// `steps` mesh steps with the mesh's origin (1: the mesh's own), with
-    /// `words` words of light bits.
-    pub fn new(lattice: Lattice, radius: f32, steps: i32, words: usize) -> Agreement {
+    /// `words` words of light bits, remembering tiles' own summaries in
+    /// `memo` (the mesh's, [`LightMesh::tile_memo`]).
+    ///
+    /// [`LightMesh::tile_memo`]: super::LightMesh::tile_memo
+    pub fn new(
+        (lattice, radius, steps): (Lattice, f32, i32),
+        words: usize,
+        memo: Arc<TileMemo>,
+    ) -> Agreement {
         assert!(
             (1..=MAX_STEPS).contains(&steps) && MAX_STEPS % steps == 0,
             "a tile of {steps}-step nodes would straddle bricks"
@@ -101,6 +120,7 @@ impl Agreement {
             own: Summaries::new(words),
             around: Summaries::new(words),
             met: FxHashMap::default(),
+            memo,
         }
     }
 
@@ -180,8 +200,10 @@ impl Agreement {
         Some(at)
     }
 
-    /// Where the summary of `tile`'s own nodes is, made first if need be.
-    /// They lie in one brick, read with one lookup.
+    /// Where the summary of `tile`'s own nodes is, made first if need be:
+    /// recalled from the memo where it holds the summary of the brick's
+    /// current revision, else read. They lie in one brick, read with one
+    /// lookup.
     fn own(&mut self, tile: IVec3, bricks: &mut BrickCache) -> usize {
         if let Some(at) = self.own.find(tile) {
             return at;
@@ -191,6 +213,15 @@ impl Agreement {
         let Some(view) = bricks.view(brick) else {
             return at;
         };
+        let key = MemoKey {
+            tile,
+            steps: self.steps,
+            store: bricks.store_id(),
+            revision: view.revision(),
+        };
+        if self.memo.recall(&key, &mut self.own, at) {
+            return at;
+        }
         let step = self.steps as usize;
         let edge = BRICK_EDGE as usize;
         for z in 0..TILE_EDGE as usize {
@@ -204,7 +235,101 @@ impl Agreement {
                 }
             }
         }
+        self.memo.remember(key, self.own.get(at));
         at
+    }
+}
+
+/// Shards of the memo: threads remembering tiles seldom wait on each other.
+const MEMO_SHARDS: usize = 64;
+/// Tiles remembered per shard before it is emptied: bounds the memo at
+/// half a million tiles, some 50 MB with 64 lights, over a fly-through
+/// whose frames meet ever more tiles.
+const MEMO_SHARD_CAPACITY: usize = 1 << 13;
+
+/// Tiles' own summaries, kept across frames and threads by the light mesh
+/// (see the module's comment): each under its tile, its lattice's steps,
+/// and the store and the brick revision it was read from.
+#[derive(Debug)]
+pub struct TileMemo {
+    shards: [RwLock<FxHashMap<(IVec3, i32), Remembered>>; MEMO_SHARDS],
+}
+
+/// What a remembered summary was read from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct MemoKey {
+    tile: IVec3,
+    steps: i32,
+    store: u64,
+    revision: u64,
+}
+
+/// One tile's own summary, and the store and brick revision it holds for.
+#[derive(Debug)]
+struct Remembered {
+    store: u64,
+    revision: u64,
+    bits: Box<[u64]>,
+    enclosed: bool,
+}
+
+impl Default for TileMemo {
+    fn default() -> TileMemo {
+        TileMemo {
+            shards: std::array::from_fn(|_| RwLock::default()),
+        }
+    }
+}
+
+impl TileMemo {
+    fn shard(&self, tile: IVec3) -> &RwLock<FxHashMap<(IVec3, i32), Remembered>> {
+        let mixed = (tile.x as u32).wrapping_mul(0x9e37_79b9)
+            ^ (tile.y as u32).wrapping_mul(0x85eb_ca6b)
+            ^ (tile.z as u32).wrapping_mul(0xc2b2_ae35);
+        &self.shards[(mixed >> 16) as usize % MEMO_SHARDS]
+    }
+
+    /// Copies the summary remembered for `key` into `into`'s summary
+    /// `at`; false, leaving it, where none is remembered for that store
+    /// and revision.
+    fn recall(&self, key: &MemoKey, into: &mut Summaries, at: usize) -> bool {
+        let shard = self
+            .shard(key.tile)
+            .read()
+            .unwrap_or_else(|e| e.into_inner());
+        match shard.get(&(key.tile, key.steps)) {
+            Some(held) if (held.store, held.revision) == (key.store, key.revision) => {
+                into.set(at, &held.bits, held.enclosed);
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Summaries remembered, in all shards.
+    #[cfg(test)]
+    fn len(&self) -> usize {
+        (self.shards.iter())
+            .map(|shard| shard.read().unwrap_or_else(|e| e.into_inner()).len())
+            .sum()
+    }
+
+    /// Remembers `summary`, read under `key`.
+    fn remember(&self, key: MemoKey, summary: Summary) {
+        let mut shard = self
+            .shard(key.tile)
+            .write()
+            .unwrap_or_else(|e| e.into_inner());
+        if shard.len() >= MEMO_SHARD_CAPACITY {
+            shard.clear();
+        }
+        let held = Remembered {
+            store: key.store,
+            revision: key.revision,
+            bits: summary.bits.into(),
+            enclosed: summary.enclosed,
+        };
+        shard.insert((key.tile, key.steps), held);
     }
 }
 
@@ -268,6 +393,13 @@ impl Summaries {
         self.bits.resize(self.bits.len() + 2 * self.words, !0);
         self.enclosed.push(false);
         at
+    }
+
+    /// Sets summary `at` to `bits` and `enclosed`, as [`Self::get`] reads
+    /// them.
+    fn set(&mut self, at: usize, bits: &[u64], enclosed: bool) {
+        self.bits[2 * self.words * at..2 * self.words * (at + 1)].copy_from_slice(bits);
+        self.enclosed[at] = enclosed;
     }
 
     fn get(&self, at: usize) -> Summary<'_> {
@@ -421,6 +553,8 @@ mod tests {
     fn a_settled_point_gets_what_walking_its_set_finds() {
         let store = store();
         let mesh = Lattice::new(H);
+        // One memo for both lattices, as a mesh's scratch shares it.
+        let memo = Arc::<TileMemo>::default();
         // The mesh's own half-balls, and the wide set's (`super::wide`):
         // every other node, twice the radius.
         for steps in [1, 2] {
@@ -429,7 +563,8 @@ mod tests {
                 h: H * steps as f32,
             };
             let radius = 2.5 * lattice.h;
-            let mut agreement = Agreement::new(lattice, radius, steps, store.words());
+            let memo = Arc::clone(&memo);
+            let mut agreement = Agreement::new((lattice, radius, steps), store.words(), memo);
             let mut bricks = BrickCache::new(&store);
             let (mut settled, mut walked_only) = (0, 0);
             let points = points(lattice, 4000).into_iter().map(|(p, n)| {
@@ -460,11 +595,42 @@ mod tests {
     }
 
     #[test]
+    fn remembered_summaries_hold_until_their_brick_is_edited() {
+        let mut store = store();
+        let lattice = Lattice::new(H);
+        let memo = Arc::<TileMemo>::default();
+        // Light 0, which every node around the point sees.
+        let reach = reach_of(0b0001);
+        let point = lattice.origin + Vec3::new(-6.5, 0.5, 0.5) * H;
+        let settle = |store: &MaskStore| {
+            let memo = Arc::clone(&memo);
+            let mut agreement = Agreement::new((lattice, 2.5 * H, 1), store.words(), memo);
+            let mut bricks = BrickCache::new(store);
+            let mut seen = [0; 2];
+            let settled = (0..POINTS_BEFORE_SUMMARY)
+                .map(|_| agreement.settle(point, &reach, &mut bricks, &mut seen))
+                .last();
+            (settled, seen)
+        };
+        assert_eq!(settle(&store), (Some(true), reach));
+        let remembered = memo.len();
+        assert!(remembered > 0);
+        // A later frame's scratch recalls them: the same answer, nothing
+        // read again.
+        assert_eq!(settle(&store), (Some(true), reach));
+        assert_eq!(memo.len(), remembered);
+        // A node beside the point loses sight of the light: its brick's
+        // summary from before is not recalled, and the point walks.
+        store.set(IVec3::new(-6, 1, 0), 0, false, Some(false));
+        assert_eq!(settle(&store).0, Some(false));
+    }
+
+    #[test]
     fn a_tiles_summary_waits_for_points_enough() {
         let store = store();
         let lattice = Lattice::new(H);
         let mut bricks = BrickCache::new(&store);
-        let mut agreement = Agreement::new(lattice, 2.5 * H, 1, store.words());
+        let mut agreement = Agreement::new((lattice, 2.5 * H, 1), store.words(), Arc::default());
         let reach = reach_of(0b0101);
         // Points a tile apart, as far from the camera: each walks, and no
         // summary is made.
@@ -487,7 +653,7 @@ mod tests {
         let store = store();
         let lattice = Lattice::new(H);
         let mut bricks = BrickCache::new(&store);
-        let mut agreement = Agreement::new(lattice, 2.5 * H, 1, store.words());
+        let mut agreement = Agreement::new((lattice, 2.5 * H, 1), store.words(), Arc::default());
         let far = lattice.origin + Vec3::new(0.5, 0.5, 0.5) * H;
         let reach = reach_of(0b0101);
         let mut first = [0; 2];
@@ -521,9 +687,9 @@ mod tests {
         let reach = reach_of(0b0001);
         let inside = lattice.origin + Vec3::new(0.5, 0.5, 0.5) * H;
         // Below kI = 2 a half-ball may hold no node: formula (1) decides.
-        let mut small = Agreement::new(lattice, 1.9 * H, 1, store.words());
+        let mut small = Agreement::new((lattice, 1.9 * H, 1), store.words(), Arc::default());
         assert!(!small.settle(inside, &reach, &mut bricks, &mut [0; 2]));
-        let mut agreement = Agreement::new(lattice, 2.5 * H, 1, store.words());
+        let mut agreement = Agreement::new((lattice, 2.5 * H, 1), store.words(), Arc::default());
         for _ in 1..POINTS_BEFORE_SUMMARY {
             agreement.settle(inside, &reach, &mut bricks, &mut [0; 2]);
         }

@@ -94,7 +94,11 @@ impl<'a> Scratch<'a> {
         Scratch {
             set: InterpolationSet::default(),
             levels: LevelScratch::default(),
-            agreement: Agreement::new(mesh.lattice, mesh.radius(), 1, mesh.masks().words()),
+            agreement: Agreement::new(
+                (mesh.lattice, mesh.radius(), 1),
+                mesh.masks().words(),
+                mesh.tile_memo(),
+            ),
             wide: WideScratch::new(mesh, lights),
             bricks: BrickCache::new(mesh.masks()),
         }

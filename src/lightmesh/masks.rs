@@ -806,6 +806,11 @@ impl<'a> BrickCache<'a> {
         }
     }
 
+    /// The identity of the store read ([`MaskStore::id`]).
+    pub fn store_id(&self) -> u64 {
+        self.store.id
+    }
+
     /// The node's mask, or None when no bit of its brick was ever computed.
     pub fn mask(&mut self, node: IVec3) -> Option<NodeMask<'a>> {
         let (brick, slot) = split(node);
@@ -856,6 +861,12 @@ impl<'a> BrickView<'a> {
     /// Whether the node in `slot` is known to lie inside closed geometry.
     pub fn is_enclosed(&self, slot: usize) -> bool {
         self.stored.enclosure.enclosed[slot / 64] & 1 << (slot % 64) != 0
+    }
+
+    /// The store's revision at the brick's last edit
+    /// ([`MaskStore::brick_revision`]).
+    pub fn revision(&self) -> u64 {
+        self.stored.revision
     }
 }
 

@@ -32,8 +32,11 @@ pub mod spacing;
 mod wide;
 pub(crate) mod wide_ball;
 
+use std::sync::Arc;
+
 use serde::Serialize;
 
+use agreement::TileMemo;
 use kernel::{Kernel, Weights};
 use lattice::Lattice;
 use masks::MaskStore;
@@ -56,6 +59,9 @@ pub struct LightMesh {
     masks: MaskStore,
     /// Bytes the masks may take before a frame is refused.
     memory_limit: usize,
+    /// What tiles of the masks agree on, remembered across frames by the
+    /// revision of the brick each was read from (`agreement`).
+    tile_memo: Arc<TileMemo>,
 }
 
 /// Why the light mesh cannot serve a frame.
@@ -171,7 +177,13 @@ impl LightMesh {
             faint_parts: 0,
             masks: MaskStore::new(lights),
             memory_limit,
+            tile_memo: Arc::default(),
         }
+    }
+
+    /// The memo of tiles' summaries, for a thread's [`agreement::Agreement`].
+    pub fn tile_memo(&self) -> Arc<TileMemo> {
+        Arc::clone(&self.tile_memo)
     }
 
     /// The faint lamps' budget ([`faint::budget_parts`]) where penumbrae

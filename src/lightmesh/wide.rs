@@ -25,9 +25,11 @@
 //! frame finds what a cold one finds. A summary per tile of the wide
 //! lattice ([`Agreement`]) settles most points without walking the set.
 
+use std::sync::Arc;
+
 use glam::{IVec3, Vec3};
 
-use super::agreement::Agreement;
+use super::agreement::{Agreement, TileMemo};
 use super::enclosure::leave_out_enclosed;
 use super::masks::BrickCache;
 use super::sight::Sight;
@@ -63,16 +65,17 @@ impl WideScratch {
             true => lamps(lights, words),
             false => vec![0; words],
         };
-        WideScratch::with(WideBall::of(mesh), lamps)
+        WideScratch::with(WideBall::of(mesh), lamps, mesh.tile_memo())
     }
 
-    /// Scratch for the wide sets of `ball`, asking about `lamps`.
-    fn with(ball: WideBall, lamps: Vec<u64>) -> WideScratch {
+    /// Scratch for the wide sets of `ball`, asking about `lamps`,
+    /// remembering tiles' summaries in `memo`.
+    fn with(ball: WideBall, lamps: Vec<u64>, memo: Arc<TileMemo>) -> WideScratch {
         let words = lamps.len();
         WideScratch {
             ball,
             lamps,
-            agreement: Agreement::new(ball.lattice, ball.radius, STEPS, words),
+            agreement: Agreement::new((ball.lattice, ball.radius, STEPS), words, memo),
             demanded: vec![0; words],
             asked: vec![0; words],
             nodes: Vec::new(),
@@ -158,7 +161,11 @@ mod tests {
     fn a_lamp_edge_beyond_the_half_ball_but_within_the_wide_set_is_found() {
         let store = store();
         let mut bricks = BrickCache::new(&store);
-        let mut wide = WideScratch::with(WideBall::around(Lattice::new(H), 2.5), vec![0b101]);
+        let mut wide = WideScratch::with(
+            WideBall::around(Lattice::new(H), 2.5),
+            vec![0b101],
+            Arc::default(),
+        );
         let reach = [0b111];
         let mesh = Lattice::new(H);
         let up = Vec3::Y;
@@ -185,7 +192,11 @@ mod tests {
         // back over it.
         assert_eq!(mixed_at(&mut wide, &mut bricks, 6.0, (0b111, 0b111)), 0b001);
         // No lamps, nothing asked (penumbrae of fixed width).
-        let mut fixed = WideScratch::with(WideBall::around(Lattice::new(H), 2.5), vec![0]);
+        let mut fixed = WideScratch::with(
+            WideBall::around(Lattice::new(H), 2.5),
+            vec![0],
+            Arc::default(),
+        );
         assert_eq!(mixed_at(&mut fixed, &mut bricks, -0.5, (0b100, 0b110)), 0);
     }
 }
