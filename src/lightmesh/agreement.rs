@@ -39,10 +39,11 @@
 //! walk. Which points settle then depends on how threads share the frame,
 //! but not what any point gets.
 
+use std::hash::BuildHasher;
 use std::sync::{Arc, RwLock};
 
 use glam::{IVec3, Vec3};
-use rustc_hash::FxHashMap;
+use rustc_hash::{FxBuildHasher, FxHashMap};
 
 use super::lattice::{self, Lattice, MAX_NODE_COORDINATE};
 use super::masks::{split, BrickCache, BRICK_EDGE};
@@ -241,7 +242,8 @@ impl Agreement {
 }
 
 /// Shards of the memo: threads remembering tiles seldom wait on each other.
-const MEMO_SHARDS: usize = 64;
+const MEMO_SHARD_BITS: u32 = 6;
+const MEMO_SHARDS: usize = 1 << MEMO_SHARD_BITS;
 /// Tiles remembered per shard before it is emptied: bounds the memo at
 /// half a million tiles, some 50 MB with 64 lights, over a fly-through
 /// whose frames meet ever more tiles.
@@ -283,10 +285,9 @@ impl Default for TileMemo {
 
 impl TileMemo {
     fn shard(&self, tile: IVec3) -> &RwLock<FxHashMap<(IVec3, i32), Remembered>> {
-        let mixed = (tile.x as u32).wrapping_mul(0x9e37_79b9)
-            ^ (tile.y as u32).wrapping_mul(0x85eb_ca6b)
-            ^ (tile.z as u32).wrapping_mul(0xc2b2_ae35);
-        &self.shards[(mixed >> 16) as usize % MEMO_SHARDS]
+        // Fx hashes mix into their high bits.
+        let hash = FxBuildHasher.hash_one(tile);
+        &self.shards[(hash >> (u64::BITS - MEMO_SHARD_BITS)) as usize]
     }
 
     /// Copies the summary remembered for `key` into `into`'s summary
