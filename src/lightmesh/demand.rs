@@ -141,7 +141,9 @@ struct Walk {
     lattice: Lattice,
     radius: f32,
     steps: i32,
-    run: Run,
+    /// The runs open ([`OPEN_RUNS`]), a ring whose oldest is at `oldest`.
+    runs: Vec<Run>,
+    oldest: usize,
     rows: Vec<Row>,
     gathered: Windows,
     /// The lights the gathered nodes are needed for.
@@ -154,7 +156,8 @@ impl Walk {
             lattice,
             radius,
             steps,
-            run: Run::new(words),
+            runs: (0..OPEN_RUNS).map(|_| Run::new(words)).collect(),
+            oldest: 0,
             rows: Vec::new(),
             gathered: Windows::new(),
             lights: vec![0; words],
@@ -162,23 +165,36 @@ impl Walk {
     }
 
     /// Needs `lights` at the nodes of the half-ball of the point at `p`
-    /// with normal `n`: through the run it joins, or one it starts.
+    /// with normal `n`: through the newest open run it joins, or one it
+    /// starts in place of the oldest, which is asked of the tables.
     fn add(&mut self, tables: &mut BrickTables, (p, n): (Vec3, Vec3), lights: &[u64]) {
-        if !(self.run).joins(&self.lattice, self.radius, (p, n), lights) {
-            self.ask_run(tables);
-            self.run.start((p, n), lights);
+        let (lattice, radius) = (&self.lattice, self.radius);
+        let count = self.runs.len();
+        let newest_first = (1..=count).map(|back| (self.oldest + count - back) % count);
+        for index in newest_first {
+            if self.runs[index].joins(lattice, radius, (p, n), lights) {
+                return;
+            }
         }
+        let oldest = self.oldest;
+        self.ask_run(tables, oldest);
+        self.runs[oldest].start((p, n), lights);
+        self.oldest = (oldest + 1) % count;
     }
 
-    /// Asks the tables for everything added: after the chunk's last point.
+    /// Asks the tables for everything added, every run open: after the
+    /// chunk's last point.
     fn finish(&mut self, tables: &mut BrickTables) {
-        self.ask_run(tables);
+        for index in 0..self.runs.len() {
+            self.ask_run(tables, index);
+        }
         self.flush(tables);
     }
 
-    /// Needs the run's lights at the rows that hold its points' half-balls.
-    fn ask_run(&mut self, tables: &mut BrickTables) {
-        let Some((p, n, spread)) = self.run.end() else {
+    /// Needs the lights of run `index` at the rows that hold its points'
+    /// half-balls.
+    fn ask_run(&mut self, tables: &mut BrickTables, index: usize) {
+        let Some((p, n, spread)) = self.runs[index].end() else {
             return;
         };
         let (lattice, radius) = (self.lattice, self.radius);
@@ -187,9 +203,9 @@ impl Walk {
             true => lattice.half_ball_rows(p, n, radius, |row| rows.push(row)),
             false => lattice.spread_half_ball_rows(p, n, radius, spread, |row| rows.push(row)),
         }
-        let lights = std::mem::take(&mut self.run.lights);
+        let lights = std::mem::take(&mut self.runs[index].lights);
         self.need(tables, &lights);
-        self.run.lights = lights;
+        self.runs[index].lights = lights;
     }
 
     /// The rows to gather next go here.
@@ -230,11 +246,18 @@ const RUN_STEPS: f32 = 0.5;
 /// How far it may lie from the first point's plane, in the same steps:
 /// points of one flat triangle lie on it to rounding.
 const RUN_PLANE_STEPS: f32 = 1.0 / 32.0;
+/// Runs a walk keeps open: the 16 points of a row of a film tile (the CPU
+/// backend shades tiles of 16×16 pixels, row by row), so a point can join
+/// the run begun above it in the tile's row before. On the 64-lamp street
+/// at 1920×1080 this halves the runs asked (1.22 M for one open run, 0.65 M
+/// for sixteen) and the rows walked (20.5 M, 9.7 M); a second row of runs
+/// open (32) adds under 1% to that.
+const OPEN_RUNS: usize = 16;
 
-/// Consecutive points whose half-balls one walk covers. Beside each other
-/// on a plane, points' sets hold nearly the same nodes: on the 64-lamp
-/// street at 1920×1080, of the points that ask their wide set, two in
-/// three lie within a mesh step (half a step of its lattice) of the last
+/// Points near each other whose half-balls one walk covers. Beside each
+/// other on a plane, points' sets hold nearly the same nodes: on the
+/// 64-lamp street at 1920×1080, of the points that ask their wide set, two
+/// in three lie within a mesh step (half a step of its lattice) of the last
 /// point that began a run, with its normal and its lamps, and one in two
 /// within half a mesh step. Such a point joins that run instead of walking
 /// its own set, and the run asks once for the rows of the ball grown to
@@ -273,11 +296,13 @@ impl Run {
         let Some((first, normal)) = self.first else {
             return false;
         };
-        if normal != n || self.lights != lights {
+        let reach = RUN_STEPS * lattice.h;
+        // Most runs tried are too far: that is told without a square root.
+        if (p - first).length_squared() > reach * reach || normal != n || self.lights != lights {
             return false;
         }
         let spread = self.spread.holding(first, n, p);
-        let joins = spread.distance <= RUN_STEPS * lattice.h
+        let joins = spread.distance <= reach
             && spread.offset <= RUN_PLANE_STEPS * lattice.h
             && spread.fits(lattice, first, radius);
         if joins {
@@ -587,6 +612,21 @@ mod tests {
             if i % 10 == 0 {
                 points.push(point(Vec3::new(2.0, 0.5 + 0.02 * i as f32, x), Vec3::X));
                 points.push(point(Vec3::new(3.0 * x, 0.0, 5.0), Vec3::Y));
+            }
+        }
+        // A patch of the floor in raster order, as a tile of the film
+        // shades it, where a row's points can join the runs of the row
+        // before. Every fourth point lies on a wall of its own: more walls
+        // than runs stay open, so the oldest runs are asked while the
+        // floor's are open.
+        for row in 0..12 {
+            for column in 0..16 {
+                let at = Vec3::new(0.7 + 0.023 * column as f32, 0.0, -2.0 + 0.019 * row as f32);
+                points.push(point(at, Vec3::Y));
+                if column % 4 == 0 {
+                    let normal = Vec3::new(1.0, 0.0, 0.1 * (row * 4 + column / 4) as f32);
+                    points.push(point(at + Vec3::Y, normal.normalize()));
+                }
             }
         }
         let demand = mesh.demand(&points, &LightLanes::new(&lights)).unwrap();
