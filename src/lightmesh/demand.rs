@@ -7,6 +7,7 @@
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
+use wide::f32x8;
 
 use super::faint::LampTerms;
 use super::lattice::{Lattice, Row, Spread};
@@ -141,9 +142,11 @@ struct Walk {
     lattice: Lattice,
     radius: f32,
     steps: i32,
-    /// The runs open ([`OPEN_RUNS`]), a ring whose oldest is at `oldest`.
+    /// The runs open ([`OPEN_RUNS`]), a ring whose oldest is at `oldest`,
+    /// and their first points, to find the few near enough to try.
     runs: Vec<Run>,
     oldest: usize,
+    firsts: RunFirsts,
     rows: Vec<Row>,
     gathered: Windows,
     /// The lights the gathered nodes are needed for.
@@ -158,6 +161,7 @@ impl Walk {
             steps,
             runs: (0..OPEN_RUNS).map(|_| Run::new(words)).collect(),
             oldest: 0,
+            firsts: RunFirsts::new(),
             rows: Vec::new(),
             gathered: Windows::new(),
             lights: vec![0; words],
@@ -169,9 +173,14 @@ impl Walk {
     /// starts in place of the oldest, which is asked of the tables.
     fn add(&mut self, tables: &mut BrickTables, (p, n): (Vec3, Vec3), lights: &[u64]) {
         let (lattice, radius) = (&self.lattice, self.radius);
-        let count = self.runs.len();
-        let newest_first = (1..=count).map(|back| (self.oldest + count - back) % count);
-        for index in newest_first {
+        // Bit j: the run j places after the oldest, so newest first is
+        // highest first.
+        let mut near =
+            (self.firsts.near(p, RUN_STEPS * lattice.h)).rotate_right(self.oldest as u32);
+        while near != 0 {
+            let after_oldest = RunBits::BITS - 1 - near.leading_zeros();
+            near &= !(1 << after_oldest);
+            let index = (self.oldest + after_oldest as usize) % OPEN_RUNS;
             if self.runs[index].joins(lattice, radius, (p, n), lights) {
                 return;
             }
@@ -179,7 +188,8 @@ impl Walk {
         let oldest = self.oldest;
         self.ask_run(tables, oldest);
         self.runs[oldest].start((p, n), lights);
-        self.oldest = (oldest + 1) % count;
+        self.firsts.set(oldest, p);
+        self.oldest = (oldest + 1) % OPEN_RUNS;
     }
 
     /// Asks the tables for everything added, every run open: after the
@@ -197,6 +207,7 @@ impl Walk {
         let Some((p, n, spread)) = self.runs[index].end() else {
             return;
         };
+        self.firsts.set(index, Vec3::INFINITY);
         let (lattice, radius) = (self.lattice, self.radius);
         let rows = self.start();
         match spread == Spread::default() {
@@ -252,7 +263,46 @@ const RUN_PLANE_STEPS: f32 = 1.0 / 32.0;
 /// at 1920×1080 this halves the runs asked (1.22 M for one open run, 0.65 M
 /// for sixteen) and the rows walked (20.5 M, 9.7 M); a second row of runs
 /// open (32) adds under 1% to that.
-const OPEN_RUNS: usize = 16;
+const OPEN_RUNS: usize = RunBits::BITS as usize;
+/// A bit per open run.
+type RunBits = u16;
+
+/// The first points of a walk's open runs, by axis, a run per lane
+/// (infinitely far where it is closed): a point's distance to all of them
+/// takes a few SIMD operations, and only runs near enough are tried. Where
+/// points lie more than half a step apart (the far surfaces of a
+/// fly-through), none is, and trying them one by one cost more than the
+/// runs saved.
+struct RunFirsts {
+    /// Per axis, per block of eight runs.
+    axes: [[f32x8; OPEN_RUNS / 8]; 3],
+}
+
+impl RunFirsts {
+    fn new() -> RunFirsts {
+        RunFirsts {
+            axes: [[f32x8::splat(f32::INFINITY); OPEN_RUNS / 8]; 3],
+        }
+    }
+
+    fn set(&mut self, run: usize, first: Vec3) {
+        for (axis, blocks) in self.axes.iter_mut().enumerate() {
+            blocks[run / 8].as_mut_array()[run % 8] = first[axis];
+        }
+    }
+
+    /// Bit i set where run i's first point lies within `reach` of `p`.
+    fn near(&self, p: Vec3, reach: f32) -> RunBits {
+        let mut near = 0;
+        for block in 0..OPEN_RUNS / 8 {
+            let offset = |axis: usize| self.axes[axis][block] - f32x8::splat(p[axis]);
+            let (x, y, z) = (offset(0), offset(1), offset(2));
+            let within = (x * x + y * y + z * z).simd_le(f32x8::splat(reach * reach));
+            near |= (within.to_bitmask() as RunBits) << (8 * block);
+        }
+        near
+    }
+}
 
 /// Points near each other whose half-balls one walk covers. Beside each
 /// other on a plane, points' sets hold nearly the same nodes: on the
@@ -296,13 +346,11 @@ impl Run {
         let Some((first, normal)) = self.first else {
             return false;
         };
-        let reach = RUN_STEPS * lattice.h;
-        // Most runs tried are too far: that is told without a square root.
-        if (p - first).length_squared() > reach * reach || normal != n || self.lights != lights {
+        if normal != n || self.lights != lights {
             return false;
         }
         let spread = self.spread.holding(first, n, p);
-        let joins = spread.distance <= reach
+        let joins = spread.distance <= RUN_STEPS * lattice.h
             && spread.offset <= RUN_PLANE_STEPS * lattice.h
             && spread.fits(lattice, first, radius);
         if joins {
