@@ -195,7 +195,7 @@ impl Walk {
     /// Asks the tables for everything added, every run open: after the
     /// chunk's last point.
     fn finish(&mut self, tables: &mut BrickTables) {
-        for index in 0..self.runs.len() {
+        for index in 0..OPEN_RUNS {
             self.ask_run(tables, index);
         }
         self.flush(tables);
@@ -664,9 +664,9 @@ mod tests {
         }
         // A patch of the floor in raster order, as a tile of the film
         // shades it, where a row's points can join the runs of the row
-        // before. Every fourth point lies on a wall of its own: more walls
-        // than runs stay open, so the oldest runs are asked while the
-        // floor's are open.
+        // before. After every fourth floor point comes one on a wall of
+        // its own: more walls than runs stay open, so the oldest runs are
+        // asked while the floor's are open.
         for row in 0..12 {
             for column in 0..16 {
                 let at = Vec3::new(0.7 + 0.023 * column as f32, 0.0, -2.0 + 0.019 * row as f32);
