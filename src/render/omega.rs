@@ -43,6 +43,12 @@ struct LightBlock {
     axis: Lanes3,
     cos_outer: f32x8,
     cos_inner: f32x8,
+    /// Whether some lane has a range, and whether some lane is a spot:
+    /// where none does, the range window and the cone are 1 in every lane
+    /// that can reach a point, and their divisions are skipped
+    /// ([`LightLanes::arrival`]).
+    ranged: bool,
+    coned: bool,
 }
 
 impl LightLanes {
@@ -67,6 +73,10 @@ impl LightLanes {
                     axis: lane3(&|light| light.axis),
                     cos_outer: lane(&|light| light.cos_outer),
                     cos_inner: lane(&|light| light.cos_inner),
+                    ranged: lanes.iter().any(|light| light.range_squared.is_finite()),
+                    coned: lanes
+                        .iter()
+                        .any(|light| light.cos_outer != OmegaLight::PADDING.cos_outer),
                 }
             })
             .collect();
@@ -114,21 +124,35 @@ impl LightLanes {
             )
         });
         let distance_squared = light.directional.select(one, dot(to_light, to_light));
-        let ratio = distance_squared / light.range_squared;
-        let window = (one - ratio * ratio).max(zero).min(one);
-        let window = window * window;
+        let window = if light.ranged {
+            let ratio = distance_squared / light.range_squared;
+            let window = (one - ratio * ratio).max(zero).min(one);
+            window * window
+        } else {
+            // range² = ∞ in every lane: the ratio is 0 and the window 1,
+            // except where distance² is ∞ or NaN, where the window is 0
+            // but window / distance² is the same either way.
+            one
+        };
         let length = distance_squared.sqrt();
         let direction = each3(|axis| to_light[axis] / length);
         // glTF's spot falloff, a squared smooth ramp between the cones (a
         // hard edge where they coincide).
-        let cos_angle = -dot(direction, light.axis);
-        let ramp = ((cos_angle - light.cos_outer) / (light.cos_inner - light.cos_outer))
-            .max(zero)
-            .min(one);
-        let cone = light.cos_inner.simd_le(light.cos_outer).select(
-            cos_angle.simd_gt(light.cos_outer).select(one, zero),
-            ramp * ramp,
-        );
+        let cone = if light.coned {
+            let cos_angle = -dot(direction, light.axis);
+            let ramp = ((cos_angle - light.cos_outer) / (light.cos_inner - light.cos_outer))
+                .max(zero)
+                .min(one);
+            light.cos_inner.simd_le(light.cos_outer).select(
+                cos_angle.simd_gt(light.cos_outer).select(one, zero),
+                ramp * ramp,
+            )
+        } else {
+            // No cone in any lane: the ramp is 2, clamped to 1, wherever
+            // the direction is finite, which it is wherever the light
+            // can reach (distance² > 0).
+            one
+        };
         let falloff = window / distance_squared * cone;
         let irradiance = each3(|c| light.power[c] * falloff);
 
@@ -417,6 +441,83 @@ mod tests {
             }
         }
         assert!(reaching > 30, "too few lights reach the point: {reaching}");
+    }
+
+    /// Lights without a range or a cone, as a street's lamps mostly are,
+    /// placed where the skipped window and cone would have mattered if
+    /// anywhere: on the point itself, beyond f32's range of squared
+    /// distances, near and far, below the horizon, and directional ones.
+    #[test]
+    fn blocks_without_ranges_or_cones_skip_them_to_the_same_bits() {
+        use crate::scene::{Light, LightKind};
+        let point_at = Vec3::new(0.25, 0.0, -0.5);
+        let places = [
+            point_at,
+            Vec3::new(3e19, 1e19, 0.0),
+            Vec3::new(0.25, 1e-30, -0.5),
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(-40.0, 0.5, 7.0),
+            Vec3::new(2.0, -1.0, 0.0),
+            Vec3::new(0.0, 1e-4, 5.0),
+        ];
+        let lamp = |kind, intensity| Light {
+            name: None,
+            kind,
+            color: Vec3::new(1.0, 0.7, 0.2),
+            intensity,
+            range: None,
+            radius: None,
+            group: None,
+        };
+        let mut lights: Vec<RenderLight> = (places.iter().enumerate())
+            .map(|(i, &at)| {
+                let node = DMat4::from_translation(at.as_dvec3());
+                RenderLight::place(
+                    &lamp(LightKind::Point, 1.0 + i as f32),
+                    node,
+                    DVec3::ZERO,
+                    0.0,
+                )
+            })
+            .collect();
+        let sun = lamp(LightKind::Directional, 3.0);
+        let down = DQuat::from_rotation_arc(DVec3::NEG_Z, DVec3::new(0.3, -1.0, 0.2).normalize());
+        lights.push(RenderLight::place(
+            &sun,
+            DMat4::from_quat(down),
+            DVec3::ZERO,
+            0.0,
+        ));
+        let skipping = LightLanes::new(&lights);
+        assert!(skipping
+            .blocks
+            .iter()
+            .all(|block| !block.ranged && !block.coned));
+        let mut every_term = skipping.clone();
+        for block in &mut every_term.blocks {
+            (block.ranged, block.coned) = (true, true);
+        }
+        let bits = |block: &OmegaBlock| block.value.map(|channel| channel.map(f32::to_bits));
+        let mut reached = 0;
+        for position in places
+            .into_iter()
+            .chain([Vec3::new(1e19, 0.0, 0.0), Vec3::NAN])
+        {
+            for normal in [Vec3::Y, Vec3::new(0.0, 0.1, 1.0).normalize()] {
+                let point = ShadingPoint {
+                    position,
+                    ..point(material(0.3, 0.4, 0.0), normal)
+                };
+                let at = PointLanes::new(&point);
+                let (fast, full) = (skipping.arrival(&at, 0), every_term.arrival(&at, 0));
+                assert_eq!(fast.reaching(), full.reaching(), "at {position}");
+                let (fast, full) = (fast.omega(&at), full.omega(&at));
+                assert_eq!(fast.reaching, full.reaching, "at {position}");
+                assert_eq!(bits(&fast), bits(&full), "at {position}");
+                reached += fast.reaching.count_ones();
+            }
+        }
+        assert!(reached > 20, "too few lights reach the points: {reached}");
     }
 
     #[test]
