@@ -40,7 +40,7 @@
 //! but not what any point gets.
 
 use std::hash::BuildHasher;
-use std::sync::{Arc, RwLock};
+use std::sync::{Arc, RwLock, RwLockReadGuard, RwLockWriteGuard};
 
 use glam::{IVec3, Vec3};
 use rustc_hash::{FxBuildHasher, FxHashMap};
@@ -254,8 +254,11 @@ const MEMO_SHARD_CAPACITY: usize = 1 << 13;
 /// and the store and the brick revision it was read from.
 #[derive(Debug)]
 pub struct TileMemo {
-    shards: [RwLock<FxHashMap<(IVec3, i32), Remembered>>; MEMO_SHARDS],
+    shards: [RwLock<Shard>; MEMO_SHARDS],
 }
+
+/// One shard's summaries, by tile and lattice steps.
+type Shard = FxHashMap<(IVec3, i32), Remembered>;
 
 /// What a remembered summary was read from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -284,20 +287,29 @@ impl Default for TileMemo {
 }
 
 impl TileMemo {
-    fn shard(&self, tile: IVec3) -> &RwLock<FxHashMap<(IVec3, i32), Remembered>> {
+    fn shard(&self, tile: IVec3) -> &RwLock<Shard> {
         // Fx hashes mix into their high bits.
         let hash = FxBuildHasher.hash_one(tile);
         &self.shards[(hash >> (u64::BITS - MEMO_SHARD_BITS)) as usize]
+    }
+
+    /// The shard of `tile`, to read. A thread that panicked holding a
+    /// shard left it whole (each edit is one insert or clear), so a
+    /// poisoned lock is taken as it is.
+    fn read(&self, tile: IVec3) -> RwLockReadGuard<'_, Shard> {
+        self.shard(tile).read().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The shard of `tile`, to edit, as [`TileMemo::read`] takes it.
+    fn write(&self, tile: IVec3) -> RwLockWriteGuard<'_, Shard> {
+        self.shard(tile).write().unwrap_or_else(|e| e.into_inner())
     }
 
     /// Copies the summary remembered for `key` into `into`'s summary
     /// `at`; false, leaving it, where none is remembered for that store
     /// and revision.
     fn recall(&self, key: &MemoKey, into: &mut Summaries, at: usize) -> bool {
-        let shard = self
-            .shard(key.tile)
-            .read()
-            .unwrap_or_else(|e| e.into_inner());
+        let shard = self.read(key.tile);
         match shard.get(&(key.tile, key.steps)) {
             Some(held) if (held.store, held.revision) == (key.store, key.revision) => {
                 into.set(at, &held.bits, held.enclosed);
@@ -317,10 +329,7 @@ impl TileMemo {
 
     /// Remembers `summary`, read under `key`.
     fn remember(&self, key: MemoKey, summary: Summary) {
-        let mut shard = self
-            .shard(key.tile)
-            .write()
-            .unwrap_or_else(|e| e.into_inner());
+        let mut shard = self.write(key.tile);
         if shard.len() >= MEMO_SHARD_CAPACITY {
             shard.clear();
         }

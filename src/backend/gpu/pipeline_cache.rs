@@ -130,21 +130,24 @@ impl PipelineCache {
             ms: started.elapsed().as_secs_f64() * 1e3,
             cached: self.held.contains(name),
         };
-        let mut log = self
-            .made
-            .lock()
-            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        let mut log = self.made();
         log.unsaved |= log.names.insert(name);
         log.log.push(made);
         pipeline
     }
 
+    /// The log of pipelines made. A thread that panicked holding it left
+    /// it whole (each edit is one insert or push), so a poisoned lock is
+    /// taken as it is: losing the log must not stop a render.
+    fn made(&self) -> std::sync::MutexGuard<'_, Made> {
+        self.made
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
     /// The pipelines made since the last call, in the order they were.
     pub fn take_made(&self) -> Vec<PipelineMade> {
-        let mut made = self
-            .made
-            .lock()
-            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        let mut made = self.made();
         std::mem::take(&mut made.log)
     }
 
@@ -154,10 +157,7 @@ impl PipelineCache {
         let (Some(driver), Some(file)) = (&self.driver, &self.file) else {
             return Ok(());
         };
-        let mut made = self
-            .made
-            .lock()
-            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        let mut made = self.made();
         if !made.unsaved {
             return Ok(());
         }
