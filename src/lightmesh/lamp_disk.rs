@@ -30,8 +30,11 @@
 //! Whitted's to 0.24/0.15/0.29; the other scenes did not move.
 
 use glam::{IVec3, Vec3};
+use wide::f32x8;
 
 use super::lattice::{self, Lattice};
+use crate::render::lanes::{dot, each3, splat3};
+use crate::render::omega::LANES;
 
 /// Points spread evenly over the unit disk, a Vogel spiral: point i at
 /// radius √((i + ½)/N) and angle i times the golden angle. Written as the
@@ -71,11 +74,30 @@ pub const DISK: [(f32, f32); 32] = [
     (0.5365958, -0.83452976),
 ];
 
+/// [`DISK`]'s coordinates by axis, eight samples to a row: the lanes of
+/// [`disk_nodes`].
+const DISK_LANES: [[[f32; LANES]; DISK.len() / LANES]; 2] = {
+    let mut lanes = [[[0.0; LANES]; DISK.len() / LANES]; 2];
+    let mut i = 0;
+    while i < DISK.len() {
+        lanes[0][i / LANES][i % LANES] = DISK[i].0;
+        lanes[1][i / LANES][i % LANES] = DISK[i].1;
+        i += 1;
+    }
+    lanes
+};
+
 /// The level nodes standing for the lamp centred at `lamp`, of radius
 /// `radius` across the light's direction, seen from `p` on a surface of
 /// normal `n`, into `out` with each sample's squared distance from the
 /// disk's centre (the kernel's weight is of that distance). One entry per
 /// sample of [`DISK`]: a node nearest two samples counts twice.
+///
+/// Eight samples at a time, with the operations and the order of one
+/// sample's scalar arithmetic in each lane (the test below holds the two
+/// to the bit, and the shader does the scalar's): a lamp in penumbra asks
+/// this of every point it reaches, and one sample at a time it took a
+/// tenth of the default's shading in a 2160p frame that reuses masks.
 pub fn disk_nodes(
     level: Lattice,
     p: Vec3,
@@ -90,20 +112,30 @@ pub fn disk_nodes(
     let light = to_lamp * (1.0 / distance);
     let (across, up) = disk_axes(light);
     let lamp_height = to_lamp.dot(n);
-    for &(x, y) in DISK.iter() {
-        let offset = across * (radius * x) + up * (radius * y);
+    let (radius, h) = (f32x8::splat(radius), f32x8::splat(level.h));
+    let (n, p, to_lamp) = (splat3(n), splat3(p), splat3(to_lamp));
+    let (across, up, origin) = (splat3(across), splat3(up), splat3(level.origin));
+    for (x, y) in DISK_LANES[0].iter().zip(&DISK_LANES[1]) {
+        let (x, y) = (radius * f32x8::new(*x), radius * f32x8::new(*y));
+        let offset = each3(|axis| across[axis] * x + up[axis] * y);
         // Along the sample's own line to the lamp's centre, the fraction
         // of the way that lifts it a step above the surface. Near the
         // horizon that grows as 1/cosine: no sample moves past half the
-        // way.
-        let height = offset.dot(n);
-        let rise = (lamp_height - height).max(f32::MIN_POSITIVE);
-        // Not `clamp`: a NaN lifts by nothing here, as in the shader.
-        #[allow(clippy::manual_clamp)]
-        let lift = ((level.h - height) / rise).max(0.0).min(0.5);
-        let sample = (p + offset) + (to_lamp - offset) * lift;
-        let node = lattice::floor(level.local(sample) + Vec3::splat(0.5)).as_ivec3();
-        out.push((node, offset.length_squared()));
+        // way. A NaN lifts by nothing (`max` takes its second operand).
+        let height = dot(offset, n);
+        let rise = (f32x8::splat(lamp_height) - height).max(f32x8::splat(f32::MIN_POSITIVE));
+        let lift = ((h - height) / rise)
+            .max(f32x8::splat(0.0))
+            .min(f32x8::splat(0.5));
+        let node = each3(|axis| {
+            let sample = (p[axis] + offset[axis]) + (to_lamp[axis] - offset[axis]) * lift;
+            lattice::floor_ints((sample - origin[axis]) / h + f32x8::splat(0.5)).to_array()
+        });
+        let squared = dot(offset, offset).to_array();
+        out.extend((0..LANES).map(|lane| {
+            let node = IVec3::new(node[0][lane], node[1][lane], node[2][lane]);
+            (node, squared[lane])
+        }));
     }
 }
 
@@ -144,6 +176,113 @@ mod tests {
             centroid.0.abs() < 0.02 && centroid.1.abs() < 0.02,
             "{centroid:?}"
         );
+    }
+
+    /// [`disk_nodes`] one sample at a time, as the shader computes it:
+    /// what the eight lanes must give, to the bit.
+    fn disk_nodes_one_by_one(
+        level: Lattice,
+        p: Vec3,
+        n: Vec3,
+        lamp: Vec3,
+        radius: f32,
+    ) -> Vec<(IVec3, f32)> {
+        let to_lamp = lamp - p;
+        let light = to_lamp * (1.0 / to_lamp.length());
+        let (across, up) = disk_axes(light);
+        let lamp_height = to_lamp.dot(n);
+        (DISK.iter())
+            .map(|&(x, y)| {
+                let offset = across * (radius * x) + up * (radius * y);
+                let height = offset.dot(n);
+                let rise = (lamp_height - height).max(f32::MIN_POSITIVE);
+                // Not `clamp`: a NaN lifts by nothing.
+                #[allow(clippy::manual_clamp)]
+                let lift = ((level.h - height) / rise).max(0.0).min(0.5);
+                let sample = (p + offset) + (to_lamp - offset) * lift;
+                let node = lattice::floor(level.local(sample) + Vec3::splat(0.5)).as_ivec3();
+                (node, offset.length_squared())
+            })
+            .collect()
+    }
+
+    fn bits(nodes: &[(IVec3, f32)]) -> Vec<(IVec3, u32)> {
+        nodes.iter().map(|&(node, d)| (node, d.to_bits())).collect()
+    }
+
+    /// The hard cases of the lanes: a lamp straight overhead and on the
+    /// surface's plane (samples under it, a rise of nothing), a point on
+    /// a lattice plane and one far out, a disk of no radius, and a NaN
+    /// normal.
+    #[test]
+    fn lanes_give_one_by_one_samples_bits_where_the_lift_is_hard() {
+        let level = Lattice::new(0.05);
+        let mut nodes = Vec::new();
+        let cases = [
+            (
+                Vec3::new(0.31, 0.0, -0.12),
+                Vec3::Y,
+                Vec3::new(0.31, 3.0, -0.12),
+                0.12,
+            ),
+            (
+                Vec3::new(0.31, 0.0, -0.12),
+                Vec3::Y,
+                Vec3::new(4.0, 0.0, 1.0),
+                0.3,
+            ),
+            (
+                Vec3::new(0.25, 0.05, 0.5),
+                Vec3::Y,
+                Vec3::new(-3.0, 0.06, 2.0),
+                0.5,
+            ),
+            (
+                Vec3::new(1.0e6, 2.0, -3.0e5),
+                Vec3::Y,
+                Vec3::new(1.0e6 + 3.0, 5.0, -3.0e5),
+                0.2,
+            ),
+            (
+                Vec3::new(1.0, 2.0, 3.0),
+                Vec3::Z,
+                Vec3::new(1.0, 6.0, 3.0),
+                0.0,
+            ),
+            (
+                Vec3::new(1.0, 2.0, 3.0),
+                Vec3::NAN,
+                Vec3::new(1.0, 6.0, 3.0),
+                0.2,
+            ),
+        ];
+        for (p, n, lamp, radius) in cases {
+            disk_nodes(level, p, n, lamp, radius, &mut nodes);
+            let one_by_one = disk_nodes_one_by_one(level, p, n, lamp, radius);
+            assert_eq!(bits(&nodes), bits(&one_by_one), "p {p}, lamp {lamp}");
+        }
+    }
+
+    proptest::proptest! {
+        /// Over points, normals, lamps, radii and levels of every
+        /// orientation, the lanes give the one-by-one samples' nodes and
+        /// distances, to the bit.
+        #[test]
+        fn lanes_give_one_by_one_samples_bits(
+            p in proptest::array::uniform3(-50.0f32..50.0),
+            n in proptest::array::uniform3(-1.0f32..1.0),
+            to_lamp in proptest::array::uniform3(-20.0f32..20.0),
+            radius in 0.0f32..2.0,
+            level in -3i32..=3,
+        ) {
+            let n = Vec3::from(n).normalize_or(Vec3::Y);
+            let (p, lamp) = (Vec3::from(p), Vec3::from(p) + Vec3::from(to_lamp));
+            let level = Lattice::new(0.1 * 2f32.powi(level));
+            let mut nodes = Vec::new();
+            disk_nodes(level, p, n, lamp, radius, &mut nodes);
+            let one_by_one = disk_nodes_one_by_one(level, p, n, lamp, radius);
+            proptest::prop_assert_eq!(bits(&nodes), bits(&one_by_one));
+        }
     }
 
     /// Node `node`'s distance from the line through `p` towards `lamp`.

@@ -3,8 +3,9 @@
 //! (in render space, which is itself fixed per sequence), so a node is the
 //! same node in every frame and its mask can be reused.
 
+use bytemuck::cast;
 use glam::{IVec3, Vec3};
-use wide::f32x8;
+use wide::{f32x8, i32x8};
 
 use crate::bits::set_bits;
 
@@ -54,6 +55,20 @@ fn floor_f32(x: f32) -> f32 {
         false => truncated,
     };
     floor.copysign(x)
+}
+
+/// `floor(x) as i32` in each of eight lanes: the node coordinate, with
+/// `as`'s saturation (and 0 for NaN), as [`floor`] and the cast give it
+/// lane by lane. Truncation (`trunc_int` saturates as `as` does) is the
+/// floor but where it rounded a negative up, which shows as the
+/// truncation's value above `x`; below −2^23 every f32 is an integer,
+/// and below −2^31 the saturated truncation lies above `x` with nothing
+/// to correct.
+pub fn floor_ints(x: f32x8) -> i32x8 {
+    let truncated = x.trunc_int();
+    let rounded_up = truncated.round_float().simd_gt(x) & x.simd_gt(f32x8::splat(-8_388_608.0));
+    // A set lane of the mask is −1 as an integer.
+    truncated + cast::<f32x8, i32x8>(rounded_up)
 }
 
 /// Most nodes along one axis of a half-ball's box.
@@ -276,12 +291,11 @@ impl Spread {
 mod tests {
     use super::*;
 
-    /// The lattice's floor and ceiling are std's, bit for bit, at every
-    /// kind of f32: zeros of both signs, halves, just below and above
-    /// integers, the last fractions below 2^23, integers beyond, the
-    /// largest values, infinities and NaN.
-    #[test]
-    fn floor_and_ceil_are_std_bit_for_bit() {
+    /// Every kind of f32: zeros of both signs, halves, just below and
+    /// above integers, the last fractions below 2^23, integers beyond,
+    /// the edges of i32, the largest values, infinities and NaN, and a
+    /// hundred thousand more, random bits and random fractions.
+    fn every_kind_of_f32() -> Vec<f32> {
         let mut values = vec![
             0.0f32,
             -0.0,
@@ -302,6 +316,10 @@ mod tests {
             16_777_217.0,
             3e9,
             -3e9,
+            2_147_483_648.0,
+            -2_147_483_648.0,
+            -2_147_483_904.0,
+            f32::NAN,
             f32::MAX,
             f32::MIN,
             f32::INFINITY,
@@ -317,12 +335,35 @@ mod tests {
             values.push(f32::from_bits(state as u32));
             values.push((state as i32 as f32) / 1024.0);
         }
-        for x in values {
+        values
+    }
+
+    /// The lattice's floor and ceiling are std's, bit for bit, at every
+    /// kind of f32.
+    #[test]
+    fn floor_and_ceil_are_std_bit_for_bit() {
+        for x in every_kind_of_f32() {
             let v = Vec3::splat(x);
             let same =
                 |a: Vec3, b: Vec3| (a.x.is_nan() && b.x.is_nan()) || a.x.to_bits() == b.x.to_bits();
             assert!(same(floor(v), v.floor()), "floor of {x:e}");
             assert!(same(ceil(v), v.ceil()), "ceil of {x:e}");
+        }
+    }
+
+    /// Eight lanes' floors as integers are `floor(x) as i32`, saturated
+    /// and 0 for NaN, at every kind of f32.
+    #[test]
+    fn floor_ints_are_the_floors_cast() {
+        let values = every_kind_of_f32();
+        for lanes in values.chunks_exact(8) {
+            let lanes: [f32; 8] = lanes.try_into().unwrap();
+            let expected = lanes.map(|x| floor(Vec3::splat(x)).x as i32);
+            assert_eq!(
+                floor_ints(f32x8::new(lanes)).to_array(),
+                expected,
+                "{lanes:?}"
+            );
         }
     }
 
