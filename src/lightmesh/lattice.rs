@@ -294,7 +294,7 @@ mod tests {
     /// Every kind of f32: zeros of both signs, halves, just below and
     /// above integers, the last fractions below 2^23, integers beyond,
     /// the edges of i32, the largest values, infinities and NaN, and a
-    /// hundred thousand more, random bits and random fractions.
+    /// hundred thousand each of random bits and random fractions.
     fn every_kind_of_f32() -> Vec<f32> {
         let mut values = vec![
             0.0f32,
