@@ -149,8 +149,9 @@ impl LightLanes {
             )
         } else {
             // No cone in any lane: the ramp is 2, clamped to 1, wherever
-            // the direction is finite, which it is wherever the light
-            // can reach (distance² > 0).
+            // the direction is finite. Where it is not, distance² is 0 (the
+            // light reaches nothing there) or not finite (the falloff is 0
+            // or NaN either way).
             one
         };
         let falloff = window / distance_squared * cone;
