@@ -274,31 +274,31 @@ type RunBits = u16;
 /// fly-through), none is, and trying them one by one cost more than the
 /// runs saved.
 struct RunFirsts {
-    /// Per axis, per block of eight runs.
-    axes: [[f32x8; OPEN_RUNS / 8]; 3],
+    /// Per axis, per block of [`LANES`] runs.
+    axes: [[f32x8; OPEN_RUNS / LANES]; 3],
 }
 
 impl RunFirsts {
     fn new() -> RunFirsts {
         RunFirsts {
-            axes: [[f32x8::splat(f32::INFINITY); OPEN_RUNS / 8]; 3],
+            axes: [[f32x8::splat(f32::INFINITY); OPEN_RUNS / LANES]; 3],
         }
     }
 
     fn set(&mut self, run: usize, first: Vec3) {
         for (axis, blocks) in self.axes.iter_mut().enumerate() {
-            blocks[run / 8].as_mut_array()[run % 8] = first[axis];
+            blocks[run / LANES].as_mut_array()[run % LANES] = first[axis];
         }
     }
 
     /// Bit i set where run i's first point lies within `reach` of `p`.
     fn near(&self, p: Vec3, reach: f32) -> RunBits {
         let mut near = 0;
-        for block in 0..OPEN_RUNS / 8 {
+        for block in 0..OPEN_RUNS / LANES {
             let offset = |axis: usize| self.axes[axis][block] - f32x8::splat(p[axis]);
             let (x, y, z) = (offset(0), offset(1), offset(2));
             let within = (x * x + y * y + z * z).simd_le(f32x8::splat(reach * reach));
-            near |= (within.to_bitmask() as RunBits) << (8 * block);
+            near |= (within.to_bitmask() as RunBits) << (LANES * block);
         }
         near
     }

@@ -40,13 +40,17 @@ pub fn ceil(v: Vec3) -> Vec3 {
     -floor(-v)
 }
 
+/// 2^23: from there on in magnitude every f32 is an integer (or infinite,
+/// or NaN), its own floor.
+const EXACT_INTEGERS: f32 = 8_388_608.0;
+
 /// `x.floor()` by truncation: below 2^23 in magnitude the cast to `i32`
 /// and back is exact, from there on every f32 is an integer (or infinite,
 /// or NaN) and is its own floor. The sign is put back for −0, the one
 /// input whose floor truncation gets wrong besides the negatives it
 /// corrects by one.
 fn floor_f32(x: f32) -> f32 {
-    if x.is_nan() || x.abs() >= 8_388_608.0 {
+    if x.is_nan() || x.abs() >= EXACT_INTEGERS {
         return x;
     }
     let truncated = x as i32 as f32;
@@ -66,7 +70,7 @@ fn floor_f32(x: f32) -> f32 {
 /// to correct.
 pub fn floor_ints(x: f32x8) -> i32x8 {
     let truncated = x.trunc_int();
-    let rounded_up = truncated.round_float().simd_gt(x) & x.simd_gt(f32x8::splat(-8_388_608.0));
+    let rounded_up = truncated.round_float().simd_gt(x) & x.simd_gt(f32x8::splat(-EXACT_INTEGERS));
     // A set lane of the mask is −1 as an integer.
     truncated + cast::<f32x8, i32x8>(rounded_up)
 }
