@@ -1,37 +1,42 @@
 #!/usr/bin/env bash
-# What a session lent a real GPU runs for issues 33 and 34, in one call
-# (about 8 minutes on an H100), from target/device.tar.xz
-# (benches/device_pack.sh): the GPU tests, which must give the CPU's bits
-# there too; the city fly-through at 1280x720, LMM1 against Whitted, with
-# `--stats` (waits, bytes, stages per frame; issue 33's steady frame under
-# 30 ms); and the 64-lamp bench at 1080p on the GPU backend (cold and
-# flythrough frames, Whitted against LMM1), twice: with the fill's shafts
-# and without (whether a GPU is better off tracing every segment).
+# What a session lent a real GPU runs for issues 33 and 34, in one call,
+# from target/device.tar.xz (benches/device_pack.sh). In the order of what
+# matters most, each step only while time is left (DEADLINE seconds, 420
+# by default, from the start):
+#   1. the first frame on a fresh machine (the driver compiles every
+#      pipeline), then with lmanim's pipeline cache alone, then with both
+#      caches, and whether the three frames are the same bits;
+#   2. the city fly-through at 1280x720, LMM1 against Whitted, with
+#      `--stats` (waits, bytes, stages per frame: issue 33's steady frame);
+#   3. the 64-lamp bench at 1080p on the GPU backend (cold and fly-through
+#      frames, Whitted against LMM1's penumbrae);
+#   4. the GPU tests, which must give the CPU's bits there too;
+#   5. the bench again with every segment traced (no shafts).
 # Everything it prints and the stats files land in $OUT (the device
 # tool's folder) or /tmp/device-check.
 # WIDTH, HEIGHT, FRAMES and BENCH_HEIGHT (0 skips the bench) make it a
-# smaller run, to try the script on lavapipe first.
+# smaller run, to try the script on a software adapter first.
 #
-# The images lent so far had the NVIDIA ICD but no Vulkan loader, and the
-# ICD that names libGLX_nvidia refuses vkCreateInstance without a display
-# (BENCHMARKS.md, "GPU start-up"): the packed loader and an ICD file naming
-# libEGL_nvidia are used where that is so.
+# Vulkan on the lent images: some had the NVIDIA ICD but no loader, or an
+# ICD naming libGLX_nvidia without glvnd beside it, which refuses
+# vkCreateInstance (BENCHMARKS.md, "GPU start-up"). The packed loader is
+# used where the machine has none, and the ICD files are tried in turn
+# until one gives lmanim an adapter.
 set -uo pipefail
 cd "$(dirname "$0")/.."
+started=$SECONDS
+deadline=${DEADLINE:-420}
 out=${OUT:-/tmp/device-check}
-width=${WIDTH:-1280} height=${HEIGHT:-720} frames=${FRAMES:-0..12}
+width=${WIDTH:-1280} height=${HEIGHT:-720} frames=${FRAMES:-0..9}
 bench_height=${BENCH_HEIGHT:-1080}
 mkdir -p "$out"
 exec > >(tee "$out/device_check.log") 2>&1
+# The log itself, for what a step's filter would drop.
+exec 3>&1
 tar -C target -xJf target/device.tar.xz
 bin=$PWD/target/device
 if ! ldconfig -p | grep -q 'libvulkan.so.1 '; then
   export LD_LIBRARY_PATH=$bin${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
-fi
-if grep -qs libGLX_nvidia /usr/share/vulkan/icd.d/nvidia_icd.json /etc/vulkan/icd.d/nvidia_icd.json; then
-  echo '{"file_format_version":"1.0.1","ICD":{"library_path":"libEGL_nvidia.so.0","api_version":"1.3"}}' \
-    > "$out/nvidia_egl_icd.json"
-  export VK_ICD_FILENAMES=$out/nvidia_egl_icd.json
 fi
 # The tests find the repository's files where they were built.
 built=/work/main
@@ -40,16 +45,68 @@ if [ ! -e "$built/animations" ]; then
 fi
 if command -v nvidia-smi >/dev/null; then nvidia-smi --query-gpu=name,driver_version --format=csv,noheader; fi
 
-echo "== GPU tests (the CPU's bits)"
-for test in gpu_backend gpu_traffic reuse_property sequence_reuse; do
-  timeout 300 "$bin/$test" --test-threads 4 2>&1 | grep -E '^test |test result' | grep -v ' ok$'
+left() { echo $((deadline - (SECONDS - started))); }
+# Runs the rest of its line under a timeout of at most $1 seconds and the
+# time left; skips it (saying so) when under 20 s are left.
+budget() {
+  local most=$1 time_left
+  shift
+  time_left=$(left)
+  if [ "$time_left" -lt 20 ]; then echo "skipped for time: $*" >&3; return 1; fi
+  timeout $((most < time_left ? most : time_left)) "$@"
+}
+
+work=$(mktemp -d)
+# NVIDIA's driver keeps its compiled code here; emptied before a cold row.
+export __GL_SHADER_DISK_CACHE_PATH=$work/driver-cache
+empty_driver_cache() {
+  rm -rf "$__GL_SHADER_DISK_CACHE_PATH" "$HOME/.cache/nvidia"
+  mkdir -p "$__GL_SHADER_DISK_CACHE_PATH"
+}
+# The courtyard's first LMM1 frame at 160x90 under the name $1, with
+# lmanim's pipeline cache in $work; prints the adapter and wall seconds.
+first_frame() {
+  local began=$EPOCHREALTIME status
+  budget 180 "$bin/lmanim" animations/courtyard.gltf --frames 0 --width 160 --height 90 \
+    --backend gpu --method lmm1 --cache "$work/lmanim-cache" \
+    --out "$work/$1.####.exr" --stats "$work/$1.json" 2>&1 | grep -E 'adapter|rror'
+  status=${PIPESTATUS[0]}
+  echo "$1: exit $status, $(awk "BEGIN{print $EPOCHREALTIME - $began}") s"
+  return "$status"
+}
+
+echo "== 1. first frame (courtyard, LMM1, 160x90)"
+egl_icd=$work/nvidia_egl_icd.json
+echo '{"file_format_version":"1.0.1","ICD":{"library_path":"libEGL_nvidia.so.0","api_version":"1.3"}}' >"$egl_icd"
+found=
+for icd in "" /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json "$egl_icd"; do
+  [ -n "$icd" ] && [ ! -e "$icd" ] && continue
+  if [ -n "$icd" ]; then
+    export VK_ICD_FILENAMES=$icd VK_DRIVER_FILES=$icd
+    echo "ICD file: $icd"
+  fi
+  empty_driver_cache
+  rm -rf "$work/lmanim-cache"
+  if first_frame no-cache && grep -q '"adapter"' "$work/no-cache.json" 2>/dev/null \
+    || [ -e "$work/no-cache.0000.exr" ]; then
+    found=yes
+    break
+  fi
+done
+[ -n "$found" ] || { echo "no GPU adapter: stopping"; exit 1; }
+empty_driver_cache
+first_frame lmanim-cache
+first_frame both-caches
+for run in lmanim-cache both-caches; do
+  cmp -s "$work/no-cache.0000.exr" "$work/$run.0000.exr" &&
+    echo "$run: the same bits" || echo "$run: BITS DIFFER"
 done
 
-echo "== city fly-through, ${width}x$height, frames $frames"
+echo "== 2. city fly-through, ${width}x$height, frames $frames"
 for method in lmm1 whitted; do
-  timeout 300 "$bin/lmanim" animations/city.gltf --backend gpu --method "$method" \
+  budget 120 "$bin/lmanim" animations/city.gltf --backend gpu --method "$method" \
     --frames "$frames" --width "$width" --height "$height" --no-cache --quiet \
-    --stats "$out/city-$method.json" --out "$out/city-$method.####.exr"
+    --stats "$out/city-$method.json" --out "$work/city-$method.####.exr" || continue
   python3 - "$out/city-$method.json" "$method" <<'PY'
 import json, sys
 for f in json.load(open(sys.argv[1]))["frames"]:
@@ -60,12 +117,18 @@ for f in json.load(open(sys.argv[1]))["frames"]:
           f'segments {g["segments_traced"]}')
 PY
 done
-rm -f "$out"/city-*.exr
 
-if [ "$bench_height" != 0 ]; then
-  for shafts in test skip; do
-    echo "== 64 lamps, ${bench_height}p, GPU backend, the fill's shafts: $shafts"
-    LMANIM_BENCH_BACKEND=gpu LMANIM_BENCH_LAMPS=64 LMANIM_BENCH_HEIGHT=$bench_height \
-      LMANIM_BENCH_SHAFTS=$shafts timeout 300 "$bin/bench_lmm" --bench
-  done
-fi
+bench() {
+  echo "== $1. 64 lamps, ${bench_height}p, GPU backend, the fill's shafts: $2"
+  LMANIM_BENCH_BACKEND=gpu LMANIM_BENCH_LAMPS=64 LMANIM_BENCH_HEIGHT=$bench_height \
+    LMANIM_BENCH_SHAFTS=$2 budget 200 "$bin/bench_lmm" --bench
+}
+[ "$bench_height" != 0 ] && bench 3 test
+
+echo "== 4. GPU tests (the CPU's bits; failures and totals)"
+for test in gpu_backend sequence_reuse reuse_property gpu_traffic; do
+  budget 150 "$bin/$test" --test-threads 8 2>&1 | grep -E '^test |test result' | grep -v ' ok$'
+done
+
+[ "$bench_height" != 0 ] && bench 5 skip
+echo "== done in $((SECONDS - started)) s"
