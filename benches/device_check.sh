@@ -7,7 +7,8 @@
 #      pipeline), then with lmanim's pipeline cache alone, then with both
 #      caches, and whether the three frames are the same bits;
 #   2. the city fly-through at 1280x720, LMM1 against Whitted, with
-#      `--stats` (waits, bytes, stages per frame: issue 33's steady frame);
+#      `--stats` (waits, bytes, stages and each pass's GPU time per frame:
+#      issue 33's steady frame);
 #   3. the 64-lamp bench at 1080p on the GPU backend (cold and fly-through
 #      frames, Whitted against LMM1's penumbrae);
 #   4. the GPU tests, which must give the CPU's bits there too;
@@ -115,6 +116,8 @@ for f in json.load(open(sys.argv[1]))["frames"]:
     print(f'{sys.argv[2]} frame {f["frame"]}: {f["seconds"] * 1e3:.1f} ms ({stages} ms), '
           f'waits {g["waits"]}, up {g["bytes_up"] / 1e6:.1f} MB, down {g["bytes_down"] / 1e6:.1f} MB, '
           f'segments {g["segments_traced"]}')
+    passes = sorted(g.get("pass_seconds", {}).items(), key=lambda kv: -kv[1])
+    print("  on the GPU: " + ", ".join(f"{name} {seconds * 1e3:.2f}" for name, seconds in passes) + " ms")
 PY
 done
 

@@ -287,7 +287,17 @@ fn stage_seconds(stats: &FrameStats) -> String {
     let stages: Vec<String> = (stats.stages.iter())
         .map(|(stage, seconds)| format!("{stage} {seconds:.2}"))
         .collect();
-    stages.join(", ")
+    let passes = stats.gpu.as_ref().map(|gpu| &gpu.passes.seconds);
+    match passes.filter(|passes| !passes.is_empty()) {
+        // The GPU's own time per pass, where the adapter times them.
+        Some(passes) => {
+            let passes: Vec<String> = (passes.iter())
+                .map(|(pass, seconds)| format!("{pass} {seconds:.3}"))
+                .collect();
+            format!("{}; on the GPU: {}", stages.join(", "), passes.join(", "))
+        }
+        None => stages.join(", "),
+    }
 }
 
 /// One frame of the scene at `path`, from scratch: its time and statistics.

@@ -47,7 +47,7 @@ fn box_on_a_floor(seconds: f32) -> SceneDesc {
 }
 
 /// Each of `times` of `scene` rendered in one sequence on `backend`, with
-/// its stats.
+/// its stats (its `seconds` the frame's wall time).
 fn frames_on(
     mut backend: Backend,
     scene: SceneDesc,
@@ -57,11 +57,13 @@ fn frames_on(
     let mut sequence = Sequence::new(scene, "box".into()).unwrap();
     (times.iter())
         .map(|&time| {
+            let started = std::time::Instant::now();
             let mut stats = FrameStats::default();
             let placed = sequence.advance(time, settings, &mut stats).unwrap();
             sequence
                 .render(&mut backend, &placed, settings, &mut stats)
                 .unwrap();
+            stats.seconds = started.elapsed().as_secs_f64();
             stats
         })
         .collect()
@@ -231,4 +233,60 @@ fn a_city_fly_through_frame_waits_twice() {
         );
         assert_eq!(gpu.waits, 2, "{gpu:?}");
     }
+}
+
+/// Where the adapter has timestamp queries (lavapipe has), a frame's
+/// stats say how long each of its passes ran on the GPU: a Whitted
+/// frame's camera rays, closest hits, shading points, direct light and
+/// film; a cold light-mesh frame's coverage, fill and formula (2) in
+/// place of the direct light. Each pass ran within its frame.
+#[test]
+fn a_frame_says_how_long_its_passes_ran_on_the_gpu() {
+    let Some(gpu) = common::gpu::backend() else {
+        return;
+    };
+    assert!(
+        gpu.times_passes() || !gpu.is_software(),
+        "the software adapter here, lavapipe, has timestamp queries"
+    );
+    if !gpu.times_passes() {
+        eprintln!("this adapter has no timestamp queries: no pass times to check");
+        return;
+    }
+    let gpu = Backend::Gpu(Box::new(gpu));
+    let whitted = settings_for(Method::Whitted);
+    let [whitted_frame] = &frames_on(gpu, box_on_a_floor(1.0), &whitted, &[0.0])[..] else {
+        unreachable!("one frame")
+    };
+    let (gpu, _) = common::gpu::backend_to_compare().expect("a GPU, as above");
+    let lmm1 = settings_for(Method::Lmm1);
+    let [lmm1_frame] = &frames_on(gpu, box_on_a_floor(1.0), &lmm1, &[0.0])[..] else {
+        unreachable!("one frame")
+    };
+    let common = [
+        "camera_rays",
+        "closest_hit",
+        "surface",
+        "accumulate",
+        "resolve",
+    ];
+    let light_mesh = ["light_mesh_coverage", "fill_segments", "light_mesh"];
+    for (stats, own) in [
+        (whitted_frame, &["direct_light"][..]),
+        (lmm1_frame, &light_mesh[..]),
+    ] {
+        let passes = &stats.gpu.as_ref().expect("GPU stats").passes;
+        for name in common.iter().chain(own) {
+            let seconds = passes.seconds.get(name).copied().unwrap_or_default();
+            assert!(
+                seconds > 0.0 && seconds <= stats.seconds,
+                "{name}: {seconds} s in a frame of {} s ({passes:?})",
+                stats.seconds
+            );
+        }
+        assert_eq!(passes.untimed, 0, "{passes:?}");
+    }
+    let times = |stats: &FrameStats| stats.gpu.as_ref().unwrap().passes.seconds.clone();
+    assert!(!times(whitted_frame).contains_key("light_mesh"));
+    assert!(!times(lmm1_frame).contains_key("direct_light"));
 }

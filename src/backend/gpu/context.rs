@@ -4,6 +4,7 @@
 use std::fmt;
 use std::path::Path;
 
+use super::pass_timer::PassTimer;
 use super::pipeline_cache::{self, PipelineCache};
 use super::shaders::Arithmetic;
 use super::traffic::Traffic;
@@ -77,6 +78,8 @@ pub struct GpuContext {
     pub exact: bool,
     /// What crossed the bus so far.
     pub traffic: Traffic,
+    /// How long each pass ran on the GPU, where the adapter can say.
+    pub pass_timer: Option<PassTimer>,
     /// The pipelines made so far, and the driver's cache they go through.
     pub pipelines: PipelineCache,
 }
@@ -110,8 +113,12 @@ impl GpuContext {
         let mut features = wgpu::Features::empty();
         features.set(wgpu::Features::SHADER_F64, f64);
         features.set(wgpu::Features::PASSTHROUGH_SHADERS, own_spirv);
-        let cache = wgpu::Features::PIPELINE_CACHE;
-        features.set(cache, adapter.features().contains(cache));
+        for wanted in [
+            wgpu::Features::PIPELINE_CACHE,
+            wgpu::Features::TIMESTAMP_QUERY,
+        ] {
+            features.set(wanted, adapter.features().contains(wanted));
+        }
         let storage_buffers =
             (available.max_storage_buffers_per_shader_stage).min(LAYERED_STORAGE_BUFFERS);
         let limits = wgpu::Limits {
@@ -133,6 +140,7 @@ impl GpuContext {
                     reason: error.to_string(),
                 }
             })?;
+        let pass_timer = PassTimer::new(&device, &queue);
         Ok(GpuContext {
             device,
             queue,
@@ -142,6 +150,7 @@ impl GpuContext {
             own_spirv,
             exact: Arithmetic::for_adapter(f64, own_spirv) == Arithmetic::ExactUncontracted,
             traffic: Traffic::default(),
+            pass_timer,
             pipelines: PipelineCache::none(),
         })
     }

@@ -35,6 +35,7 @@ mod layered;
 mod light_mesh;
 pub mod mask_pool;
 mod pass;
+pub mod pass_timer;
 mod pipeline_cache;
 mod pipeline_file;
 mod pipelines;
@@ -74,6 +75,7 @@ use fill::FillPass;
 use frame::{DirectMethod, Frame};
 use light_mesh::LightMeshShading;
 use mask_pool::MaskPool;
+use pass_timer::PassTimer;
 pub use pipeline_cache::PipelineMade;
 use pipelines::Pipelines;
 use surface::{FrameSurfaces, SceneSurfaces};
@@ -191,6 +193,12 @@ impl GpuBackend {
     /// every answer and frame is the CPU backend's to the bit.
     pub fn rounds_as_the_cpu(&self) -> bool {
         self.context.exact
+    }
+
+    /// Whether the adapter has timestamp queries: then each frame's stats
+    /// say how long its passes ran on the GPU ([`pass_timer`]).
+    pub fn times_passes(&self) -> bool {
+        self.context.pass_timer.is_some()
     }
 
     /// Whether the adapter is a CPU (lavapipe, WARP, SwiftShader): its
@@ -340,8 +348,10 @@ impl GpuBackend {
         self.mask_pool = Some(pool);
         self.save_pipelines();
         let pipelines = self.context.pipelines.take_made();
+        let timer = self.context.pass_timer.as_ref();
         stats.gpu = Some(GpuFrameStats {
             traffic: self.context.traffic.since(traffic),
+            passes: timer.map(PassTimer::take).unwrap_or_default(),
             pipelines,
         });
         let image = Image {

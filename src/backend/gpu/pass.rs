@@ -349,7 +349,11 @@ impl WorldPass {
             entries: &entries,
         });
         let pipeline = self.pipeline(context);
-        let mut pass = encoder.begin_compute_pass(&Default::default());
+        let timer = context.pass_timer.as_ref();
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(self.name()),
+            timestamp_writes: timer.and_then(|timer| timer.writes(self.name())),
+        });
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &bind_group, &[]);
         match length {

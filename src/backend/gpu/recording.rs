@@ -42,13 +42,20 @@ impl<'c> Recording<'c> {
 
     /// Submits what is recorded with `downloads` copied out after it, and
     /// waits for them: the one way the CPU blocks on the GPU. `why` names
-    /// what the CPU needs (logged); recording goes on afterwards.
+    /// what the CPU needs (logged); recording goes on afterwards. The
+    /// passes' timestamps come back with it (`super::pass_timer`), not
+    /// counted in `gpu.bytes_down`, which is what the frame needs.
     pub fn wait(
         &mut self,
         why: &'static str,
         downloads: Downloads,
     ) -> Result<Downloaded, GpuError> {
         log::trace!("waiting on the GPU for {why}");
+        self.context.traffic.waited(downloads.bytes);
+        let timer = self.context.pass_timer.as_ref();
+        // The caller's buffers and the timer's, for as long as this wait.
+        let mut downloads: Downloads<'_> = downloads;
+        let times = timer.and_then(|timer| timer.resolve(&mut self.encoder, &mut downloads));
         let bytes = downloads.bytes.max(4);
         let staging = self.context.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(why),
@@ -59,7 +66,6 @@ impl<'c> Recording<'c> {
         for (buffer, at, size) in &downloads.copies {
             (self.encoder).copy_buffer_to_buffer(buffer, 0, &staging, *at, *size);
         }
-        self.context.traffic.waited(downloads.bytes);
         self.submit();
         let slice = staging.slice(..);
         let (sender, receiver) = std::sync::mpsc::channel();
@@ -75,9 +81,13 @@ impl<'c> Recording<'c> {
             .map_err(|error| failed(&error))?
             .map_err(|error| failed(&error))?;
         let view = slice.get_mapped_range().map_err(|error| failed(&error))?;
-        Ok(Downloaded {
+        let downloaded = Downloaded {
             bytes: view.to_vec(),
-        })
+        };
+        if let (Some(timer), Some(times)) = (timer, times) {
+            timer.keep(&downloaded, times);
+        }
+        Ok(downloaded)
     }
 
     /// [`Recording::wait`] for the first `count` items of one buffer.

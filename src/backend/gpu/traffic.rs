@@ -12,14 +12,18 @@ use serde::Serialize;
 use wgpu::util::DeviceExt;
 
 use super::context::GpuContext;
+use super::pass_timer::PassTimes;
 use super::pipeline_cache::PipelineMade;
 
-/// A frame's `gpu` object in `--stats`: its traffic, and the pipelines
-/// compiled for it (the first frame's, mostly; see `pipelines`).
+/// A frame's `gpu` object in `--stats`: its traffic, the time of its
+/// passes on the GPU, and the pipelines compiled for it (the first
+/// frame's, mostly; see `pipelines`).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct GpuFrameStats {
     #[serde(flatten)]
     pub traffic: GpuTraffic,
+    #[serde(flatten)]
+    pub passes: PassTimes,
     pub pipelines: Vec<PipelineMade>,
 }
 
