@@ -30,15 +30,14 @@
 // LOOPS_CUT_SHORT).
 @group(0) @binding(COUNTS) var<storage, read_write> counts: array<atomic<u32>, LIGHT_MESH_COUNTERS>;
 
-// Whether the point keeps `node` in its interpolation set: LMM's step 3
-// (the segment from the point to the node is clear), or LMM1's stand-in
-// (`enclosure::blocks_some`: not an enclosed node blocked from a light
-// the point asks for).
-fn kept(node: vec3<i32>, origin: vec3<f32>, reach_base: u32) -> bool {
+// Whether the point keeps `node` (whose mask is `mask`) in its
+// interpolation set: LMM's step 3 (the segment from the point to the node
+// is clear), or LMM1's stand-in (`enclosure::blocks_some`: not an
+// enclosed node blocked from a light the point asks for).
+fn kept(node: vec3<i32>, mask: NodeMask, origin: vec3<f32>, reach_base: u32) -> bool {
     if directory.header.point_to_node_tests != 0u {
         return !segment_blocked(origin, node_position(node) - origin, 1.0);
     }
-    let mask = node_mask(node);
     if !mask.enclosed {
         return true;
     }
@@ -51,24 +50,20 @@ fn kept(node: vec3<i32>, origin: vec3<f32>, reach_base: u32) -> bool {
 }
 
 // Which of the point's candidates it keeps, a bit per candidate in walk
-// order: settled once per point, then read by every walk over its
-// half-ball (one tally per 32 lights, and the blocker's search for the
-// nearest blocked node of each light the set disagrees on), so each
-// point-to-node segment is traced once, not once per walk. A half-ball
-// has at most MAX_SPAN³ candidates, KEPT_WORDS words.
+// order: settled once per point, by its first tally, then read by every
+// later walk over its half-ball (one tally per further 32 lights, and the
+// blocker's search for the nearest blocked node of each light the set
+// disagrees on), so each point-to-node segment is traced once, not once
+// per walk. A half-ball has at most MAX_SPAN³ candidates, KEPT_WORDS
+// words.
 var<private> kept_bits: array<u32, KEPT_WORDS>;
 
-fn settle_kept(ball: HalfBall, origin: vec3<f32>, reach_base: u32) {
-    var place = 0u;
-    var nodes = walk(ball);
-    while next_node(&nodes) {
-        let bit = 1u << (place % 32u);
-        if kept(nodes.node, origin, reach_base) {
-            kept_bits[place / 32u] |= bit;
-        } else {
-            kept_bits[place / 32u] &= ~bit;
-        }
-        place += 1u;
+fn set_kept(place: u32, keeps: bool) {
+    let bit = 1u << (place % 32u);
+    if keeps {
+        kept_bits[place / 32u] |= bit;
+    } else {
+        kept_bits[place / 32u] &= ~bit;
     }
 }
 
@@ -149,17 +144,22 @@ struct Tally {
     counters: array<u32, COUNTER_BITS>,
 }
 
-fn tally(ball: HalfBall, reach_base: u32, word: u32) -> Tally {
+// The point's first tally (`settle`) also settles which candidates it
+// keeps (`kept_bits`), in the same walk: one walk fewer per point.
+fn tally(ball: HalfBall, origin: vec3<f32>, reach_base: u32, word: u32, settle: bool) -> Tally {
     let wanted = reach[reach_base + word];
     var t = Tally(0u, 0u, 0u, wanted, 0u, array<u32, COUNTER_BITS>());
     var nodes = walk(ball);
     while next_node(&nodes) {
         let place = t.candidates;
         t.candidates += 1u;
+        let mask = node_mask(nodes.node);
+        if settle {
+            set_kept(place, kept(nodes.node, mask, origin, reach_base));
+        }
         if !is_kept(place) {
             continue;
         }
-        let mask = node_mask(nodes.node);
         t.kept += 1u;
         let weight = node_weight(nodes.distance_squared);
         t.total += weight;
@@ -545,8 +545,7 @@ fn shade(index: u32) {
     let origin = offset_ray_origin(point.position, point.geometric_normal);
     let light_words = directory.header.light_words;
     let reach_base = index * 2u * light_words;
-    settle_kept(ball, origin, reach_base);
-    let first_tally = tally(ball, reach_base, 0u);
+    let first_tally = tally(ball, origin, reach_base, 0u, true);
     let total = first_tally.total;
     add_count(COUNT_CANDIDATES, first_tally.candidates);
     add_count(COUNT_INTERPOLATION_SET, first_tally.kept);
@@ -568,7 +567,7 @@ fn shade(index: u32) {
     for (var word = 0u; word < light_words; word++) {
         var t = first_tally;
         if word > 0u {
-            t = tally(ball, reach_base, word);
+            t = tally(ball, origin, reach_base, word, false);
         }
         // The lamps the set agrees on and the wide set does not; the
         // nearest blocked node of those and of the lamps the set disagrees
