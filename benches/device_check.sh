@@ -58,23 +58,8 @@ budget() {
 }
 
 work=$(mktemp -d)
-# NVIDIA's driver keeps its compiled code here; emptied before a cold row.
-export __GL_SHADER_DISK_CACHE_PATH=$work/driver-cache
-empty_driver_cache() {
-  rm -rf "$__GL_SHADER_DISK_CACHE_PATH" "$HOME/.cache/nvidia"
-  mkdir -p "$__GL_SHADER_DISK_CACHE_PATH"
-}
-# The courtyard's first LMM1 frame at 160x90 under the name $1, with
-# lmanim's pipeline cache in $work; prints the adapter and wall seconds.
-first_frame() {
-  local began=$EPOCHREALTIME status
-  budget 180 "$bin/lmanim" animations/courtyard.gltf --frames 0 --width 160 --height 90 \
-    --backend gpu --method lmm1 --cache "$work/lmanim-cache" \
-    --out "$work/$1.####.exr" --stats "$work/$1.json" 2>&1 | grep -E 'adapter|rror'
-  status=${PIPESTATUS[0]}
-  echo "$1: exit $status, $(awk "BEGIN{print $EPOCHREALTIME - $began}") s"
-  return "$status"
-}
+lmanim=$bin/lmanim first_frame_limit=180
+source benches/first_frame.sh
 
 echo "== 1. first frame (courtyard, LMM1, 160x90)"
 egl_icd=$work/nvidia_egl_icd.json
@@ -87,8 +72,8 @@ for icd in "" /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json "$egl_icd"; d
     echo "ICD file: $icd"
   fi
   empty_driver_cache
-  rm -rf "$work/lmanim-cache"
-  if first_frame no-cache && grep -q '"adapter"' "$work/no-cache.json" 2>/dev/null \
+  rm -rf "$work/lmanim-cache-lmm1"
+  if first_frame no-cache lmm1 && grep -q '"adapter"' "$work/no-cache.json" 2>/dev/null \
     || [ -e "$work/no-cache.0000.exr" ]; then
     found=yes
     break
@@ -96,8 +81,8 @@ for icd in "" /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json "$egl_icd"; d
 done
 [ -n "$found" ] || { echo "no GPU adapter: stopping"; exit 1; }
 empty_driver_cache
-first_frame lmanim-cache
-first_frame both-caches
+first_frame lmanim-cache lmm1
+first_frame both-caches lmm1
 for run in lmanim-cache both-caches; do
   cmp -s "$work/no-cache.0000.exr" "$work/$run.0000.exr" &&
     echo "$run: the same bits" || echo "$run: BITS DIFFER"

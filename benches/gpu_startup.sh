@@ -16,23 +16,7 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 lmanim=${1:-target/release/lmanim}
 work=$(mktemp -d)
-# NVIDIA's driver keeps its compiled code here; emptied before a cold row.
-export __GL_SHADER_DISK_CACHE_PATH=$work/driver-cache
-
-empty_driver_cache() {
-    rm -rf "$__GL_SHADER_DISK_CACHE_PATH" "$HOME/.cache/nvidia"
-    mkdir -p "$__GL_SHADER_DISK_CACHE_PATH"
-}
-
-# One run: its name, then the method; prints the wall seconds.
-first_frame() {
-    local started=$EPOCHREALTIME
-    "$lmanim" animations/courtyard.gltf --frames 0 --width 160 --height 90 \
-        --backend gpu --method "$2" --cache "$work/lmanim-cache-$2" \
-        --out "$work/$1.####.exr" --stats "$work/$1.json" --quiet
-    local status=$?
-    echo "$1: exit $status, $(awk "BEGIN{print $EPOCHREALTIME - $started}") s"
-}
+source benches/first_frame.sh
 
 for method in lmm1 whitted; do
     empty_driver_cache

@@ -123,18 +123,14 @@ impl PassTimer {
         Some(PendingTimes { passes, stamps })
     }
 
-    /// Adds the passes' times that `downloaded` holds to the sums. A pass
-    /// whose end does not follow its start (a driver that wrapped its
-    /// counter, or left a query unwritten) is counted untimed.
+    /// Adds the passes' times that `downloaded` holds to the sums (a pass
+    /// [`seconds_between`] cannot time is counted untimed).
     pub fn keep(&self, downloaded: &Downloaded, pending: PendingTimes) {
         let stamps = downloaded.take(pending.stamps);
         let mut state = self.state();
         for (name, pair) in pending.passes.into_iter().zip(stamps.chunks_exact(2)) {
-            match pair[1].checked_sub(pair[0]).filter(|_| pair[0] != 0) {
-                Some(ticks) => {
-                    *state.times.seconds.entry(name).or_default() +=
-                        ticks as f64 * self.period * 1e-9;
-                }
+            match seconds_between(pair[0], pair[1], self.period) {
+                Some(seconds) => *state.times.seconds.entry(name).or_default() += seconds,
                 None => state.times.untimed += 1,
             }
         }
@@ -150,5 +146,36 @@ impl PassTimer {
     /// whole numbers of passes either way.
     fn state(&self) -> MutexGuard<'_, TimerState> {
         self.state.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+}
+
+/// The seconds from timestamp `start` to `end`, at `period` nanoseconds a
+/// tick; `None` where the end does not follow the start (a driver that
+/// wrapped its counter) or the start is 0 (a query left unwritten reads
+/// 0).
+fn seconds_between(start: u64, end: u64, period: f64) -> Option<f64> {
+    let ticks = end.checked_sub(start).filter(|_| start != 0)?;
+    Some(ticks as f64 * period / 1e9)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_pass_is_timed_only_where_its_end_follows_its_start() {
+        assert_eq!(seconds_between(1_000, 3_000, 1.0), Some(2e-6));
+        // lavapipe's ticks are nanoseconds; NVIDIA's too; others differ.
+        let odd_period = seconds_between(10, 20, 83.333).unwrap();
+        assert!((odd_period - 833.33e-9).abs() < 1e-18, "{odd_period}");
+        assert_eq!(seconds_between(5, 5, 1.0), Some(0.0), "a pass of no work");
+        assert_eq!(
+            seconds_between(3_000, 1_000, 1.0),
+            None,
+            "a wrapped counter"
+        );
+        assert_eq!(seconds_between(0, 1_000, 1.0), None, "an unwritten start");
+        let longest = seconds_between(1, u64::MAX, 1.0).unwrap();
+        assert!((longest - 1.8446744073709552e10).abs() < 1.0, "{longest}");
     }
 }
