@@ -102,7 +102,8 @@ for f in json.load(open(sys.argv[1]))["frames"]:
           f'waits {g["waits"]}, up {g["bytes_up"] / 1e6:.1f} MB, down {g["bytes_down"] / 1e6:.1f} MB, '
           f'segments {g["segments_traced"]}')
     passes = sorted(g.get("pass_seconds", {}).items(), key=lambda kv: -kv[1])
-    print("  on the GPU: " + ", ".join(f"{name} {seconds * 1e3:.2f}" for name, seconds in passes) + " ms")
+    if passes:
+        print("  on the GPU: " + ", ".join(f"{name} {seconds * 1e3:.2f}" for name, seconds in passes) + " ms")
 PY
 done
 
