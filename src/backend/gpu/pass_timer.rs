@@ -11,7 +11,10 @@
 //! Adapters without timestamp queries time nothing, and a frame then
 //! reports no pass times. A pass recorded when every query of the set is
 //! claimed is counted in `untimed` instead: the sums are lower bounds
-//! then.
+//! then. A band that fails between recording a pass and submitting it
+//! leaves that pass pending: the next wait reads its queries unwritten
+//! (untimed, or a stale pair). Only a failed frame does that, and its
+//! error ends the run.
 
 use std::collections::BTreeMap;
 use std::sync::{Mutex, MutexGuard, PoisonError};
