@@ -58,7 +58,8 @@ budget() {
 }
 
 work=$(mktemp -d)
-lmanim=$bin/lmanim first_frame_limit=180
+lmanim=$bin/lmanim
+first_frame_runner() { budget 180 "$@"; }
 source benches/first_frame.sh
 
 echo "== 1. first frame (courtyard, LMM1, 160x90)"
