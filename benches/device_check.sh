@@ -8,7 +8,7 @@
 #      caches, and whether the three frames are the same bits;
 #   2. the city fly-through at 1280x720, LMM1 against Whitted, with
 #      `--stats` (waits, bytes, stages and each pass's GPU time per frame:
-#      issue 33's steady frame);
+#      issue 33's steady frame), and LMM1 with the trees still;
 #   3. the 64-lamp bench at 1080p on the GPU backend (cold and fly-through
 #      frames, Whitted against LMM1's penumbrae);
 #   4. the GPU tests, which must give the CPU's bits there too;
@@ -89,12 +89,13 @@ for run in lmanim-cache both-caches; do
     echo "$run: the same bits" || echo "$run: BITS DIFFER"
 done
 
-echo "== 2. city fly-through, ${width}x$height, frames $frames"
-for method in lmm1 whitted; do
-  budget 120 "$bin/lmanim" animations/city.gltf --backend gpu --method "$method" \
+# One city run: its name, the scene, the method; per-frame figures from
+# its `--stats`.
+city() {
+  budget 120 "$bin/lmanim" "$2" --backend gpu --method "$3" \
     --frames "$frames" --width "$width" --height "$height" --no-cache --quiet \
-    --stats "$out/city-$method.json" --out "$work/city-$method.####.exr" || continue
-  python3 - "$out/city-$method.json" "$method" <<'PY'
+    --stats "$out/$1.json" --out "$work/$1.####.exr" || return
+  python3 - "$out/$1.json" "$1" <<'PY'
 import json, sys
 for f in json.load(open(sys.argv[1]))["frames"]:
     g = f["gpu"]
@@ -106,7 +107,20 @@ for f in json.load(open(sys.argv[1]))["frames"]:
     if passes:
         print("  on the GPU: " + ", ".join(f"{name} {seconds * 1e3:.2f}" for name, seconds in passes) + " ms")
 PY
-done
+}
+
+echo "== 2. city fly-through, ${width}x$height, frames $frames"
+city city-lmm1 animations/city.gltf lmm1
+city city-whitted animations/city.gltf whitted
+# The city without its swaying trees: what the crowns' walks cost a
+# steady frame (BENCHMARKS.md, "A steady city frame's fill is the wind's").
+python3 - "$work/city-still-trees.gltf" <<'PY'
+import json, sys
+scene = json.load(open("animations/city.gltf"))
+scene["animations"] = [a for a in scene["animations"] if a.get("name") != "Wind"]
+json.dump(scene, open(sys.argv[1], "w"))
+PY
+city city-still-trees-lmm1 "$work/city-still-trees.gltf" lmm1
 
 bench() {
   echo "== $1. 64 lamps, ${bench_height}p, GPU backend, the fill's shafts: $2"
