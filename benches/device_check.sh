@@ -39,10 +39,14 @@ bin=$PWD/target/device
 if ! ldconfig -p | grep -q 'libvulkan.so.1 '; then
   export LD_LIBRARY_PATH=$bin${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
 fi
-# The tests find the repository's files where they were built.
+# The tests find the repository's files, and the command-line tests
+# lmanim, where they were built.
 built=/work/main
 if [ ! -e "$built/animations" ]; then
   mkdir -p "$(dirname "$built")" && ln -sfn "$PWD" "$built"
+fi
+if [ ! -e "$built/target/release/lmanim" ]; then
+  mkdir -p "$built/target/release" && cp "$bin/lmanim" "$built/target/release/"
 fi
 if command -v nvidia-smi >/dev/null; then nvidia-smi --query-gpu=name,driver_version --format=csv,noheader; fi
 
@@ -101,7 +105,7 @@ for f in json.load(open(sys.argv[1]))["frames"]:
     g = f["gpu"]
     stages = " ".join(f"{k} {v * 1e3:.1f}" for k, v in sorted(f["stages"].items()))
     print(f'{sys.argv[2]} frame {f["frame"]}: {f["seconds"] * 1e3:.1f} ms ({stages} ms), '
-          f'waits {g["waits"]}, up {g["bytes_up"] / 1e6:.1f} MB, down {g["bytes_down"] / 1e6:.1f} MB, '
+          f'waits {g["waits"]} ({g["wait_seconds"] * 1e3:.1f} ms), up {g["bytes_up"] / 1e6:.1f} MB, down {g["bytes_down"] / 1e6:.1f} MB, '
           f'segments {g["segments_traced"]}')
     passes = sorted(g.get("pass_seconds", {}).items(), key=lambda kv: -kv[1])
     if passes:
@@ -129,9 +133,10 @@ bench() {
 }
 [ "$bench_height" != 0 ] && bench 3 test
 
-echo "== 4. GPU tests (the CPU's bits; failures and totals)"
+echo "== 4. GPU tests (the CPU's bits; failures and totals; each whole log in $out)"
 for test in gpu_backend sequence_reuse reuse_property gpu_traffic; do
-  budget 150 "$bin/$test" --test-threads 8 2>&1 | grep -E '^test |test result' | grep -v ' ok$'
+  budget 150 "$bin/$test" --test-threads 8 >"$out/test-$test.log" 2>&1
+  grep -E '^test |test result|panicked|left:|right:' "$out/test-$test.log" | grep -v ' ok$'
 done
 
 [ "$bench_height" != 0 ] && bench 5 skip

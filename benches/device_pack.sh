@@ -12,16 +12,22 @@ rm -rf "$out" && mkdir -p "$out"
 cargo build --release --quiet
 cp target/release/lmanim "$out/"
 
-# The executable cargo built for `$@`, from its JSON messages.
+# The executable cargo built for target $2 of kind $1 (test, bench),
+# from its JSON messages: not the last one named, which is lmanim itself
+# when the build had to relink it for the tests.
 executable() {
-  cargo "$@" --no-run --quiet --message-format=json |
+  local kind=$1 name=$2
+  cargo "$kind" --release --"$kind" "$name" --no-run --quiet --message-format=json |
     python3 -c 'import json, sys
-print([m["executable"] for m in map(json.loads, sys.stdin) if m.get("executable")][-1])'
+kind, name = sys.argv[1:]
+print(*[m["executable"] for m in map(json.loads, sys.stdin)
+        if m.get("executable") and m["target"]["name"] == name and kind in m["target"]["kind"]])' \
+      "$kind" "$name"
 }
 for test in gpu_backend gpu_traffic reuse_property sequence_reuse; do
-  cp "$(executable test --release --test "$test")" "$out/$test"
+  cp "$(executable test "$test")" "$out/$test"
 done
-cp "$(executable bench --bench lmm)" "$out/bench_lmm"
+cp "$(executable bench lmm)" "$out/bench_lmm"
 strip "$out"/*
 cp -L /usr/lib/x86_64-linux-gnu/libvulkan.so.1 "$out/"
 tar -C target -cJf target/device.tar.xz device

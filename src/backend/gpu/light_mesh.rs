@@ -120,6 +120,10 @@ pub struct LightMeshShading<'m> {
     counted: Counters,
     /// The last level's fill, while its answers are on the GPU.
     pending: Option<PendingFill>,
+    /// Seconds the CPU's store spent taking the fills' answers, the
+    /// frame's `merge` stage: it runs inside the waits' callers
+    /// (`coverage`, `resolve`), so it is timed where it happens.
+    merge_seconds: f64,
 }
 
 /// A level's fill (and enclosure probes) whose bits the GPU has written
@@ -173,6 +177,7 @@ impl<'m> LightMeshShading<'m> {
             counts: answer_buffer::<Counters>(context, "light-mesh counters", 1)?,
             counted: [0; LIGHT_MESH_COUNTERS as usize],
             pending: None,
+            merge_seconds: 0.0,
         })
     }
 
@@ -202,6 +207,9 @@ impl<'m> LightMeshShading<'m> {
         let (edits, changed) = self.pool.refresh(context, self.mesh, p2n)?;
         edits.write(context, &passes.patch, scene, recording, self.pool)?;
         self.work.bricks_uploaded += changed;
+        stats.add_stage_time("upload", start.elapsed().as_secs_f64());
+
+        let start = Instant::now();
         let (reach, records, read_slots) =
             self.cover(passes, context, scene, lights, level, recording)?;
         stats.add_stage_time("coverage", start.elapsed().as_secs_f64());
@@ -288,6 +296,7 @@ impl<'m> LightMeshShading<'m> {
         let Some(mut pending) = self.pending.take() else {
             return;
         };
+        let start = Instant::now();
         pending.answers.keep(downloaded, parts.fill);
         let PendingFill {
             demand,
@@ -304,6 +313,7 @@ impl<'m> LightMeshShading<'m> {
             self.work.nodes_probed += enclosure.probed;
         }
         self.pool.written_on_gpu(self.mesh.masks(), &bricks);
+        self.merge_seconds += start.elapsed().as_secs_f64();
     }
 
     /// Adds the last fill's answers (and its probes'), where they are
@@ -471,6 +481,7 @@ impl<'m> LightMeshShading<'m> {
             let downloaded = Recording::new(context).wait(why, downloads)?;
             self.settle_fill(&downloaded, parts);
         }
+        stats.add_stage_time("merge", self.merge_seconds);
         let counts = self.counted;
         let points = counts[LOOPS_CUT_SHORT as usize];
         if points > 0 {

@@ -9,6 +9,7 @@
 //! ([`Downloads`]) comes back in one copy and one map.
 
 use std::marker::PhantomData;
+use std::time::Instant;
 
 use bytemuck::Pod;
 
@@ -51,7 +52,8 @@ impl<'c> Recording<'c> {
         downloads: Downloads,
     ) -> Result<Downloaded, GpuError> {
         log::trace!("waiting on the GPU for {why}");
-        self.context.traffic.waited(downloads.bytes);
+        let began = Instant::now();
+        let bytes_wanted = downloads.bytes;
         let timer = self.context.pass_timer.as_ref();
         // The caller's buffers and the timer's, for as long as this wait.
         let mut downloads: Downloads<'_> = downloads;
@@ -84,6 +86,7 @@ impl<'c> Recording<'c> {
         let downloaded = Downloaded {
             bytes: view.to_vec(),
         };
+        self.context.traffic.waited(bytes_wanted, began.elapsed());
         if let (Some(timer), Some(times)) = (timer, times) {
             timer.keep(&downloaded, times);
         }

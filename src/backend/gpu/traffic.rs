@@ -7,6 +7,7 @@
 //! (issue 33) is held to, a steady frame waiting on the GPU at most twice.
 
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Duration;
 
 use serde::Serialize;
 use wgpu::util::DeviceExt;
@@ -34,10 +35,11 @@ pub struct Traffic {
     bytes_up: AtomicU64,
     bytes_down: AtomicU64,
     segments_traced: AtomicU64,
+    wait_nanos: AtomicU64,
 }
 
 /// One frame's traffic (or a run's, from its first snapshot).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct GpuTraffic {
     /// Blocking read-backs: each submits what was recorded and waits for
     /// the GPU to finish it, bringing back one or several buffers.
@@ -49,6 +51,10 @@ pub struct GpuTraffic {
     /// The light mesh's node-to-light segments the GPU traced for the
     /// fill (`super::fill`): the fill's work that crossed to the GPU.
     pub segments_traced: u64,
+    /// Seconds the CPU spent blocked in those waits: from submitting to
+    /// holding the bytes. A frame's `seconds` less this is what the CPU
+    /// spent on its own work, which on a fast GPU is most of the frame.
+    pub wait_seconds: f64,
 }
 
 impl Traffic {
@@ -58,6 +64,7 @@ impl Traffic {
             bytes_up: self.bytes_up.load(Ordering::Relaxed),
             bytes_down: self.bytes_down.load(Ordering::Relaxed),
             segments_traced: self.segments_traced.load(Ordering::Relaxed),
+            wait_seconds: seconds(self.wait_nanos.load(Ordering::Relaxed)),
         }
     }
 
@@ -69,13 +76,17 @@ impl Traffic {
             bytes_up: now.bytes_up - before.bytes_up,
             bytes_down: now.bytes_down - before.bytes_down,
             segments_traced: now.segments_traced - before.segments_traced,
+            wait_seconds: now.wait_seconds - before.wait_seconds,
         }
     }
 
-    /// Counts one blocking read-back of `bytes`.
-    pub fn waited(&self, bytes: u64) {
+    /// Counts one blocking read-back of `bytes`, which held the CPU for
+    /// `blocked`.
+    pub fn waited(&self, bytes: u64, blocked: Duration) {
         self.waits.fetch_add(1, Ordering::Relaxed);
         self.bytes_down.fetch_add(bytes, Ordering::Relaxed);
+        let nanos = u64::try_from(blocked.as_nanos()).unwrap_or(u64::MAX);
+        self.wait_nanos.fetch_add(nanos, Ordering::Relaxed);
     }
 
     /// Counts `segments` traced for the fill.
@@ -86,6 +97,10 @@ impl Traffic {
     fn sent(&self, bytes: u64) {
         self.bytes_up.fetch_add(bytes, Ordering::Relaxed);
     }
+}
+
+fn seconds(nanos: u64) -> f64 {
+    Duration::from_nanos(nanos).as_secs_f64()
 }
 
 impl GpuContext {
