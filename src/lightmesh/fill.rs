@@ -188,7 +188,8 @@ impl LightMesh {
             .par_iter()
             .map(|brick| self.fill_brick(brick, demand.words, lights, world))
             .collect();
-        for (brick, filled) in demand.bricks.iter().zip(filled) {
+        let mut updates = Vec::new();
+        for (brick, filled) in demand.bricks.iter().zip(&filled) {
             stats.nodes_computed += filled.nodes;
             stats.bits_computed += filled.bits_computed;
             stats.bits_reused += filled.bits_needed - filled.bits_computed;
@@ -197,9 +198,10 @@ impl LightMesh {
             stats.fill_remembered += filled.work.remembered;
             stats.fill_hidden_groups += filled.work.hidden_groups;
             if filled.bits_computed > 0 {
-                self.masks.merge_brick(brick.brick, &filled.update);
+                updates.push((brick.brick, &filled.update));
             }
         }
+        self.masks.merge_bricks(&updates);
         stats.nodes_cached = self.masks.nodes_cached() as u64;
         Ok(())
     }

@@ -317,59 +317,62 @@ impl MaskStore {
             update.dynamic_computed[word] = bit;
             update.dynamic_occluded[word] = if occluded { bit } else { 0 };
         }
-        self.merge_slot(brick, slot, &update, 0);
+        let words = self.words;
+        let (stored, known) = self.edit(brick);
+        let merged = merge_slot(stored, known, words, slot, &update, 0);
+        self.nodes += merged.became_a_node as usize;
+        self.static_found += merged.found;
     }
 
     /// Records a whole brick's computed bits (layout `slot * words + word`).
     pub fn merge_brick(&mut self, brick: IVec3, update: &LayerUpdate) {
-        let words = self.words;
-        for slot in 0..BRICK_NODES {
-            let range = slot * words..(slot + 1) * words;
-            let computed = update.static_computed[range.clone()]
-                .iter()
-                .chain(&update.dynamic_computed[range])
-                .any(|&word| word != 0);
-            if computed {
-                self.merge_slot(brick, slot, update, slot * words);
-            }
-        }
+        self.merge_bricks(&[(brick, update)]);
     }
 
-    fn merge_slot(&mut self, brick: IVec3, slot: usize, update: &LayerUpdate, offset: usize) {
-        let words = self.words;
-        let (stored, known) = self.edit(brick);
-        let node = &mut stored.nodes[slot * GROUPS * words..(slot + 1) * GROUPS * words];
-        let was_empty = node[STATIC_VALID * words..(STATIC_VALID + 1) * words]
-            .iter()
-            .all(|&valid| valid == 0);
-        let (mut now_valid, mut found) = (false, 0);
-        for word in 0..words {
-            let valid_before = (NodeMask { bits: node, words }).valid(word);
-            let at = |group: usize| group * words + word;
-            let (computed, value) = (
-                update.static_computed[offset + word],
-                update.static_visible[offset + word],
-            );
-            node[at(STATIC_VISIBLE)] = (node[at(STATIC_VISIBLE)] & !computed) | (value & computed);
-            found += (computed & !node[at(STATIC_VALID)]).count_ones() as u64;
-            node[at(STATIC_VALID)] |= computed;
-            let (computed, value) = (
-                update.dynamic_computed[offset + word],
-                update.dynamic_occluded[offset + word],
-            );
-            node[at(DYNAMIC_OCCLUDED)] =
-                (node[at(DYNAMIC_OCCLUDED)] & !computed) | (value & computed);
-            node[at(DYNAMIC_VALID)] |= computed;
-            stored.dynamic_lights[word] |= computed;
-            now_valid |= node[at(STATIC_VALID)] != 0;
-            let valid_after = (NodeMask { bits: node, words }).valid(word);
-            known.gain(word, valid_after & !valid_before);
-            known.lose(word, valid_before & !valid_after);
+    /// Records whole bricks' computed bits, each brick named once: the
+    /// store ends as [`MaskStore::merge_brick`] called for each in turn
+    /// leaves it, revisions included, while the bricks are merged in
+    /// parallel (taken out of the map, stamped in order, put back).
+    pub fn merge_bricks(&mut self, updates: &[(IVec3, &LayerUpdate)]) {
+        use rayon::prelude::*;
+        let (words, lights) = (self.words, self.lights);
+        let computed: Vec<Vec<usize>> = (updates.par_iter())
+            .map(|(_, update)| computed_slots(update, words))
+            .collect();
+        let mut taken = Vec::new();
+        for (&(brick, update), slots) in updates.iter().zip(computed) {
+            if slots.is_empty() {
+                continue;
+            }
+            self.revision += 1;
+            let mut stored = (self.bricks.remove(&brick)).unwrap_or_else(|| Brick::new(words));
+            stored.revision = self.revision;
+            taken.push((brick, stored, update, slots));
         }
-        if was_empty && now_valid {
-            self.nodes += 1;
-        }
+        let (new_nodes, found, known) = (taken.par_iter_mut())
+            .fold(
+                || (0, 0, KnownCounts::new(lights)),
+                |(mut new_nodes, mut found, mut known), (_, stored, update, slots)| {
+                    for &slot in slots.iter() {
+                        let merged =
+                            merge_slot(stored, &mut known, words, slot, update, slot * words);
+                        new_nodes += merged.became_a_node as usize;
+                        found += merged.found;
+                    }
+                    (new_nodes, found, known)
+                },
+            )
+            .reduce(
+                || (0, 0, KnownCounts::new(lights)),
+                |(nodes_a, found_a, mut known), (nodes_b, found_b, other)| {
+                    known.add(&other);
+                    (nodes_a + nodes_b, found_a + found_b, known)
+                },
+            );
+        self.nodes += new_nodes;
         self.static_found += found;
+        self.known.add(&known);
+        (self.bricks).extend(taken.into_iter().map(|(brick, stored, ..)| (brick, stored)));
     }
 
     /// Clears validity bits, brick by brick in parallel: `clear` gets each
@@ -731,7 +734,10 @@ impl BrickValidity<'_> {
     }
 }
 
-/// Per light, how many nodes hold a valid bit of it.
+/// Per light, how many nodes hold a valid bit of it. The counts are kept
+/// modulo 2^64, so a part of a tally (one thread's share of
+/// [`MaskStore::merge_bricks`], which may lose more than it gains) adds up
+/// with the others to the true count.
 #[derive(Clone, Debug)]
 struct KnownCounts {
     per_light: Box<[u64]>,
@@ -747,7 +753,7 @@ impl KnownCounts {
     /// One more node for each light `64·word + bit` that `bits` sets.
     fn gain(&mut self, word: usize, bits: u64) {
         for bit in set_bits(bits) {
-            self.per_light[64 * word + bit] += 1;
+            self.per_light[64 * word + bit] = self.per_light[64 * word + bit].wrapping_add(1);
         }
     }
 
@@ -759,19 +765,19 @@ impl KnownCounts {
     /// One node fewer for each light `64·word + bit` that `bits` sets.
     fn lose(&mut self, word: usize, bits: u64) {
         for bit in set_bits(bits) {
-            self.per_light[64 * word + bit] -= 1;
+            self.per_light[64 * word + bit] = self.per_light[64 * word + bit].wrapping_sub(1);
         }
     }
 
     fn add(&mut self, other: &KnownCounts) {
         for (count, more) in self.per_light.iter_mut().zip(&other.per_light) {
-            *count += more;
+            *count = count.wrapping_add(*more);
         }
     }
 
     fn subtract(&mut self, other: &KnownCounts) {
         for (count, fewer) in self.per_light.iter_mut().zip(&other.per_light) {
-            *count -= fewer;
+            *count = count.wrapping_sub(*fewer);
         }
     }
 }
@@ -885,6 +891,71 @@ pub fn join(brick: IVec3, slot: usize) -> IVec3 {
         (slot / (edge * edge)) as i32,
     );
     brick * BRICK_EDGE + local
+}
+
+/// The slots of a whole brick's `update` (layout `slot * words + word`)
+/// with a computed bit in either layer.
+fn computed_slots(update: &LayerUpdate, words: usize) -> Vec<usize> {
+    (0..BRICK_NODES)
+        .filter(|&slot| {
+            let range = slot * words..(slot + 1) * words;
+            update.static_computed[range.clone()]
+                .iter()
+                .chain(&update.dynamic_computed[range])
+                .any(|&word| word != 0)
+        })
+        .collect()
+}
+
+/// What merging one slot changed beyond its bits.
+struct SlotMerged {
+    /// The node had no valid static bit before and has one now.
+    became_a_node: bool,
+    /// Static bits valid now that were not.
+    found: u64,
+}
+
+/// Records `update`'s bits (from `offset`) in `slot` of `stored`, keeping
+/// `known`'s counts of valid bits.
+fn merge_slot(
+    stored: &mut Brick,
+    known: &mut KnownCounts,
+    words: usize,
+    slot: usize,
+    update: &LayerUpdate,
+    offset: usize,
+) -> SlotMerged {
+    let node = &mut stored.nodes[slot * GROUPS * words..(slot + 1) * GROUPS * words];
+    let was_empty = node[STATIC_VALID * words..(STATIC_VALID + 1) * words]
+        .iter()
+        .all(|&valid| valid == 0);
+    let (mut now_valid, mut found) = (false, 0);
+    for word in 0..words {
+        let valid_before = (NodeMask { bits: node, words }).valid(word);
+        let at = |group: usize| group * words + word;
+        let (computed, value) = (
+            update.static_computed[offset + word],
+            update.static_visible[offset + word],
+        );
+        node[at(STATIC_VISIBLE)] = (node[at(STATIC_VISIBLE)] & !computed) | (value & computed);
+        found += (computed & !node[at(STATIC_VALID)]).count_ones() as u64;
+        node[at(STATIC_VALID)] |= computed;
+        let (computed, value) = (
+            update.dynamic_computed[offset + word],
+            update.dynamic_occluded[offset + word],
+        );
+        node[at(DYNAMIC_OCCLUDED)] = (node[at(DYNAMIC_OCCLUDED)] & !computed) | (value & computed);
+        node[at(DYNAMIC_VALID)] |= computed;
+        stored.dynamic_lights[word] |= computed;
+        now_valid |= node[at(STATIC_VALID)] != 0;
+        let valid_after = (NodeMask { bits: node, words }).valid(word);
+        known.gain(word, valid_after & !valid_before);
+        known.lose(word, valid_before & !valid_after);
+    }
+    SlotMerged {
+        became_a_node: was_empty && now_valid,
+        found,
+    }
 }
 
 #[cfg(test)]

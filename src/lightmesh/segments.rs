@@ -345,10 +345,12 @@ impl LightMesh {
         let updates: Vec<LayerUpdate> = (fill.bricks.par_iter())
             .map(|brick| brick.group_update(words))
             .collect();
-        for ((demanded, brick), update) in demand.bricks.iter().zip(&fill.bricks).zip(updates) {
-            self.masks.merge_brick(demanded.brick, &update);
-            if !brick.segments.is_empty() {
-                self.masks.hold(demanded.brick);
+        let bricks = demand.bricks.iter().map(|demanded| demanded.brick);
+        let named: Vec<_> = bricks.clone().zip(&updates).collect();
+        self.masks.merge_bricks(&named);
+        for (brick, fill) in bricks.zip(&fill.bricks) {
+            if !fill.segments.is_empty() {
+                self.masks.hold(brick);
             }
         }
     }
@@ -381,15 +383,17 @@ impl LightMesh {
             .collect();
         stats.fill_shafts += fill.shafts;
         stats.fill_hidden_groups += fill.hidden_groups;
-        for (demanded, merge) in demand.bricks.iter().zip(merged) {
+        let mut updates = Vec::new();
+        for (demanded, merge) in demand.bricks.iter().zip(&merged) {
             stats.fill_segments += merge.segments;
             stats.nodes_computed += merge.nodes_computed;
             stats.bits_computed += merge.bits_computed;
             stats.bits_reused += merge.bits_needed - merge.bits_computed;
             if merge.bits_computed > 0 {
-                self.masks.merge_brick(demanded.brick, &merge.update);
+                updates.push((demanded.brick, &merge.update));
             }
         }
+        self.masks.merge_bricks(&updates);
         stats.nodes_cached = self.masks.nodes_cached() as u64;
     }
 }

@@ -40,6 +40,7 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::IVec3;
+use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
 use super::context::{GpuContext, GpuError};
@@ -203,9 +204,7 @@ impl MaskPool {
             })
             .collect();
         let mut edits = SlotEdits::default();
-        let changed = (stale.into_iter())
-            .filter(|&(brick, slot)| self.bring_up(store, brick, slot, &mut edits))
-            .count() as u64;
+        let changed = self.bring_up(store, &stale, &mut edits) as u64;
         self.build_directory(context, mesh, point_to_node_tests)?;
         Ok((edits, changed))
     }
@@ -263,7 +262,7 @@ impl MaskPool {
         if wanted > self.capacity {
             self.grow(context, wanted.max(2 * self.capacity).min(limit_slots))?;
         }
-        let mut edits = SlotEdits::default();
+        let mut stale = Vec::new();
         for &brick in demanded {
             let Some(revision) = store.brick_revision(brick) else {
                 continue;
@@ -286,38 +285,50 @@ impl MaskPool {
             };
             if resident.revision != revision {
                 resident.revision = revision;
-                let slot = resident.slot;
-                upload.bricks += self.bring_up(store, brick, slot, &mut edits) as u64;
+                stale.push((brick, resident.slot));
             }
         }
+        let mut edits = SlotEdits::default();
+        upload.bricks = self.bring_up(store, &stale, &mut edits) as u64;
         self.build_directory(context, mesh, point_to_node_tests)?;
         Ok((edits, upload))
     }
 
-    /// Folds `brick` of `store` into the words its slot should hold and
-    /// adds to `edits` those that differ from what the slot holds (all of
-    /// them, as one write, where most differ); returns whether any did.
+    /// Folds each of `bricks` (with its slot) of `store` into the words its
+    /// slot should hold and adds to `edits` those that differ from what
+    /// the slot holds (all of them, as one write, where most differ);
+    /// returns how many bricks had any. The folds and comparisons run in
+    /// parallel; the edits are taken in `bricks`' order, so what goes up
+    /// does not depend on the threads.
     fn bring_up(
         &mut self,
         store: &MaskStore,
-        brick: IVec3,
-        slot: u32,
+        bricks: &[(IVec3, u32)],
         edits: &mut SlotEdits,
-    ) -> bool {
-        let Some(words) = fold_brick(store, brick) else {
-            return false;
-        };
-        let start = slot as usize * words.len();
-        let held = &mut self.mirror[start..start + words.len()];
-        let changed: Vec<usize> = (0..words.len()).filter(|&i| held[i] != words[i]).collect();
-        held.copy_from_slice(&words);
-        if 2 * changed.len() >= words.len() {
-            edits.slots.push((start, words));
-        } else {
-            let word = |i: usize| [(start + i) as u32, words[i]];
-            edits.words.extend(changed.iter().map(|&i| word(i)));
+    ) -> usize {
+        let slot_words = self.slot_words();
+        let mirror = &self.mirror;
+        let folds: Vec<(usize, Vec<u32>, Vec<usize>)> = (bricks.par_iter())
+            .filter_map(|&(brick, slot)| {
+                let words = fold_brick(store, brick)?;
+                let start = slot as usize * slot_words;
+                let held = &mirror[start..start + slot_words];
+                let changed: Vec<usize> =
+                    (0..slot_words).filter(|&i| held[i] != words[i]).collect();
+                (!changed.is_empty()).then_some((start, words, changed))
+            })
+            .collect();
+        let brought_up = folds.len();
+        for (start, words, changed) in folds {
+            self.mirror[start..start + slot_words].copy_from_slice(&words);
+            if 2 * changed.len() >= slot_words {
+                edits.slots.push((start, words));
+            } else {
+                let word = |i: usize| [(start + i) as u32, words[i]];
+                edits.words.extend(changed.iter().map(|&i| word(i)));
+            }
         }
-        !changed.is_empty()
+        brought_up
     }
 
     /// The pool word where each of `bricks`' slots starts, for a pass
@@ -335,14 +346,21 @@ impl MaskPool {
     /// goes up.
     pub fn written_on_gpu(&mut self, store: &MaskStore, bricks: &[IVec3]) {
         let slot_words = self.slot_words();
-        for brick in bricks {
-            let (Some(resident), Some(revision), Some(words)) = (
-                self.resident.get_mut(brick),
-                store.brick_revision(*brick),
-                fold_brick(store, *brick),
-            ) else {
-                continue;
-            };
+        let resident = &self.resident;
+        // A brick whose revision did not move since its slot took it is
+        // folded in the mirror already: the pass wrote nothing the store
+        // did not take (every answer merged is an edit).
+        let folds: Vec<(IVec3, u64, Vec<u32>)> = (bricks.par_iter())
+            .filter_map(|&brick| {
+                let revision = store.brick_revision(brick)?;
+                if resident.get(&brick)?.revision == revision {
+                    return None;
+                }
+                Some((brick, revision, fold_brick(store, brick)?))
+            })
+            .collect();
+        for (brick, revision, words) in folds {
+            let resident = (self.resident.get_mut(&brick)).expect("a resident brick, as above");
             resident.revision = revision;
             let start = resident.slot as usize * slot_words;
             self.mirror[start..start + slot_words].copy_from_slice(&words);
