@@ -16,8 +16,10 @@ cp target/release/lmanim "$out/"
 # from its JSON messages: not the last one named, which is lmanim itself
 # when the build had to relink it for the tests.
 executable() {
-  local kind=$1 name=$2
-  cargo "$kind" --release --"$kind" "$name" --no-run --quiet --message-format=json |
+  local kind=$1 name=$2 profile=()
+  # Benches build with the bench profile (release) already.
+  [ "$kind" = test ] && profile=(--release)
+  cargo "$kind" "${profile[@]}" --"$kind" "$name" --no-run --quiet --message-format=json |
     python3 -c 'import json, sys
 kind, name = sys.argv[1:]
 print(*[m["executable"] for m in map(json.loads, sys.stdin)
