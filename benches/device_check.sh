@@ -20,9 +20,10 @@
 #
 # Vulkan on the lent images: some had the NVIDIA ICD but no loader, or an
 # ICD naming libGLX_nvidia without glvnd beside it, which refuses
-# vkCreateInstance (BENCHMARKS.md, "GPU start-up"). The packed loader is
-# used where the machine has none, and the ICD files are tried in turn
-# until one gives lmanim an adapter.
+# vkCreateInstance (BENCHMARKS.md, "GPU start-up"). Where the machine
+# lacks either, the packed Debian packages of both are unpacked into /
+# (the device runs as root; on 2026-11-30's H200 that made the ICD work),
+# and the ICD files are tried in turn until one gives lmanim an adapter.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 started=$SECONDS
@@ -36,8 +37,9 @@ exec > >(tee "$out/device_check.log") 2>&1
 exec 3>&1
 tar -C target -xJf target/device.tar.xz
 bin=$PWD/target/device
-if ! ldconfig -p | grep -q 'libvulkan.so.1 '; then
-  export LD_LIBRARY_PATH=$bin${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+if ! ldconfig -p | grep -q 'libvulkan.so.1 ' || ! ldconfig -p | grep -q 'libGLdispatch.so.0 '; then
+  for deb in "$bin"/debs/*.deb; do dpkg -x "$deb" /; done
+  ldconfig
 fi
 # The tests find the repository's files, and the command-line tests
 # lmanim, where they were built.

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Packs what a session lent a GPU machine runs (benches/device_check.sh):
 # the release lmanim, the GPU test binaries and the light-mesh bench,
-# stripped, with this machine's Vulkan loader (the lent images have had
-# none), into target/device.tar.xz: about 25 MB, where the device tool
-# carries at most 64 MiB. Run from the repository root on the build
+# stripped, with Debian's packages of the Vulkan loader and glvnd (the
+# lent images have had neither), into target/device.tar.xz: about 16 MB,
+# where the device tool carries at most 64 MiB. Run from the repository root on the build
 # machine, then carry target/device.tar.xz and run
 # `bash benches/device_check.sh` on the device.
 set -euo pipefail
@@ -31,6 +31,10 @@ for test in gpu_backend gpu_traffic reuse_property sequence_reuse; do
 done
 cp "$(executable bench lmm)" "$out/bench_lmm"
 strip "$out"/*
-cp -L /usr/lib/x86_64-linux-gnu/libvulkan.so.1 "$out/"
+# The Vulkan loader and glvnd, which NVIDIA's ICD needs (its
+# libGLX_nvidia refuses vkCreateInstance without libGLdispatch): the lent
+# images have had neither (BENCHMARKS.md, "GPU start-up").
+mkdir -p "$out/debs"
+(cd "$out/debs" && apt-get download -q libvulkan1 libglvnd0 libegl1 libgl1 libglx0 libgles2 libopengl0 2>/dev/null)
 tar -C target -cJf target/device.tar.xz device
 ls -l target/device.tar.xz
