@@ -335,12 +335,24 @@ impl MaskStore {
     /// parallel (taken out of the map, stamped in order, put back).
     pub fn merge_bricks(&mut self, updates: &[(IVec3, &LayerUpdate)]) {
         use rayon::prelude::*;
-        let (words, lights) = (self.words, self.lights);
-        let computed: Vec<Vec<usize>> = (updates.par_iter())
+        let words = self.words;
+        let slots: Vec<Vec<usize>> = (updates.par_iter())
             .map(|(_, update)| computed_slots(update, words))
             .collect();
+        let updates: Vec<_> = (updates.iter().zip(&slots))
+            .map(|(&(brick, update), slots)| (brick, update, &slots[..]))
+            .collect();
+        self.merge_bricks_at(&updates);
+    }
+
+    /// [`MaskStore::merge_bricks`], each update with the slots that hold
+    /// its computed bits, in order (a fill that knows them spares the
+    /// scan of all [`BRICK_NODES`]); a brick with none is left alone.
+    pub fn merge_bricks_at(&mut self, updates: &[(IVec3, &LayerUpdate, &[usize])]) {
+        use rayon::prelude::*;
+        let (words, lights) = (self.words, self.lights);
         let mut taken = Vec::new();
-        for (&(brick, update), slots) in updates.iter().zip(computed) {
+        for &(brick, update, slots) in updates {
             if slots.is_empty() {
                 continue;
             }

@@ -24,7 +24,7 @@
 //! not take the CPU's cores, is faster without them has not been
 //! measured; `benches/device_check.sh` measures it.
 
-use glam::Vec3;
+use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
 use super::demand::{BrickDemand, Demand};
@@ -342,12 +342,23 @@ impl LightMesh {
     /// answers, which leaves them as they are.
     pub fn settle_groups(&mut self, demand: &Demand, fill: &SegmentFill) {
         let words = demand.words;
-        let updates: Vec<LayerUpdate> = (fill.bricks.par_iter())
-            .map(|brick| brick.group_update(words))
+        // Most bricks have no group: nothing to make or scan for them.
+        let updates: Vec<(IVec3, LayerUpdate, Vec<usize>)> = (demand.bricks.par_iter())
+            .zip(&fill.bricks)
+            .filter(|(_, brick)| brick.has_groups())
+            .map(|(demanded, brick)| {
+                (
+                    demanded.brick,
+                    brick.group_update(words),
+                    brick.group_slots(),
+                )
+            })
             .collect();
+        let named: Vec<_> = (updates.iter())
+            .map(|(brick, update, slots)| (*brick, update, &slots[..]))
+            .collect();
+        self.masks.merge_bricks_at(&named);
         let bricks = demand.bricks.iter().map(|demanded| demanded.brick);
-        let named: Vec<_> = bricks.clone().zip(&updates).collect();
-        self.masks.merge_bricks(&named);
         for (brick, fill) in bricks.zip(&fill.bricks) {
             if !fill.segments.is_empty() {
                 self.masks.hold(brick);
@@ -390,10 +401,10 @@ impl LightMesh {
             stats.bits_computed += merge.bits_computed;
             stats.bits_reused += merge.bits_needed - merge.bits_computed;
             if merge.bits_computed > 0 {
-                updates.push((demanded.brick, &merge.update));
+                updates.push((demanded.brick, &merge.update, &merge.slots[..]));
             }
         }
-        self.masks.merge_bricks(&updates);
+        self.masks.merge_bricks_at(&updates);
         stats.nodes_cached = self.masks.nodes_cached() as u64;
     }
 }
@@ -401,6 +412,8 @@ impl LightMesh {
 /// One brick's bits from its fill, and what they count for the stats.
 struct BrickMerge {
     update: LayerUpdate,
+    /// The slots with a computed bit in `update`, in order.
+    slots: Vec<usize>,
     segments: u64,
     nodes_computed: u64,
     bits_computed: u64,
@@ -430,20 +443,27 @@ impl BrickFill {
                 }
             }
         }
-        let (mut nodes_computed, mut bits_computed) = (0, 0);
-        for slot in 0..BRICK_NODES {
+        let mut touched = self.group_slots();
+        touched.extend(self.segments.iter().map(|segment| segment.node as usize));
+        touched.sort_unstable();
+        touched.dedup();
+        let (mut slots, mut bits_computed) = (Vec::with_capacity(touched.len()), 0);
+        for slot in touched {
             let range = slot * words..(slot + 1) * words;
             let computed: u64 = (update.static_computed[range.clone()].iter())
                 .zip(&update.dynamic_computed[range])
                 .map(|(s, d)| (s | d).count_ones() as u64)
                 .sum();
-            nodes_computed += (computed > 0) as u64;
-            bits_computed += computed;
+            if computed > 0 {
+                slots.push(slot);
+                bits_computed += computed;
+            }
         }
         BrickMerge {
             update,
+            nodes_computed: slots.len() as u64,
+            slots,
             segments,
-            nodes_computed,
             bits_computed,
             bits_needed: demanded.needed.iter().map(|w| w.count_ones() as u64).sum(),
         }
@@ -451,6 +471,24 @@ impl BrickFill {
 }
 
 impl BrickFill {
+    /// Whether shafts or walls settled any of the brick's bits.
+    fn has_groups(&self) -> bool {
+        !(self.static_clear.is_empty()
+            && self.static_hidden.is_empty()
+            && self.dynamic_clear.is_empty())
+    }
+
+    /// The slots whose bits the groups settled, in order, once each.
+    fn group_slots(&self) -> Vec<usize> {
+        let places = [&self.static_clear, &self.static_hidden, &self.dynamic_clear];
+        let mut slots: Vec<usize> = (places.iter().flat_map(|places| places.iter()))
+            .map(|place| place.slot as usize)
+            .collect();
+        slots.sort_unstable();
+        slots.dedup();
+        slots
+    }
+
     /// The brick's update from its groups alone: clear shafts and hiding
     /// walls.
     fn group_update(&self, words: usize) -> LayerUpdate {

@@ -543,18 +543,23 @@ fn slot_buffer(context: &GpuContext, bytes: u64) -> Result<wgpu::Buffer, GpuErro
 fn fold_brick(store: &MaskStore, brick: IVec3) -> Option<Vec<u32>> {
     let bits = store.brick(brick)?;
     let light_words = MaskPool::light_words(store.lights());
-    let mut words = Vec::with_capacity(MaskPool::slot_bytes(light_words) / size_of::<u32>());
-    for slot in 0..BRICK_NODES {
+    let mut words = vec![0; MaskPool::slot_bytes(light_words) / size_of::<u32>()];
+    let (nodes, flags) = words.split_at_mut(BRICK_NODES * GROUPS as usize * light_words);
+    for (slot, node) in nodes
+        .chunks_exact_mut(GROUPS as usize * light_words)
+        .enumerate()
+    {
         let mask = store.slot_mask(bits, slot);
-        let half = |bits: u64, word: usize| (bits >> (32 * (word % 2))) as u32;
-        for word in 0..light_words {
-            words.push(half(mask.visible(word / 2), word));
-            words.push(half(mask.valid(word / 2), word));
+        for (word, pair) in node.chunks_exact_mut(2).enumerate() {
+            let half = |bits: u64| (bits >> (32 * (word % 2))) as u32;
+            pair[0] = half(mask.visible(word / 2));
+            pair[1] = half(mask.valid(word / 2));
         }
     }
     let BrickEnclosure { known, enclosed } = store.enclosure(brick);
-    words.extend_from_slice(bytemuck::cast_slice(&known));
-    words.extend_from_slice(bytemuck::cast_slice(&enclosed));
+    let (known_words, enclosed_words) = flags.split_at_mut(flags.len() / 2);
+    known_words.copy_from_slice(bytemuck::cast_slice(&known));
+    enclosed_words.copy_from_slice(bytemuck::cast_slice(&enclosed));
     Some(words)
 }
 
