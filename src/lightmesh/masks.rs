@@ -36,6 +36,8 @@
 //! them by (`super::segments::Segment::sees`), and the store takes the
 //! same bits at the CPU's next wait, before anything reads it.
 
+use std::ops::Range;
+
 use glam::IVec3;
 use rustc_hash::FxHashMap;
 
@@ -216,6 +218,23 @@ impl LayerUpdate {
             dynamic_occluded: vec![0; len],
         }
     }
+
+    /// The update made of `ranges` of this one's words, one after another.
+    fn rows(&self, ranges: impl Iterator<Item = Range<usize>> + Clone) -> LayerUpdate {
+        let take = |words: &[u64]| {
+            ranges
+                .clone()
+                .flat_map(|range| &words[range])
+                .copied()
+                .collect()
+        };
+        LayerUpdate {
+            static_computed: take(&self.static_computed),
+            static_visible: take(&self.static_visible),
+            dynamic_computed: take(&self.dynamic_computed),
+            dynamic_occluded: take(&self.dynamic_occluded),
+        }
+    }
 }
 
 impl MaskStore {
@@ -336,18 +355,24 @@ impl MaskStore {
     pub fn merge_bricks(&mut self, updates: &[(IVec3, &LayerUpdate)]) {
         use rayon::prelude::*;
         let words = self.words;
-        let slots: Vec<Vec<usize>> = (updates.par_iter())
-            .map(|(_, update)| computed_slots(update, words))
+        let rows: Vec<(Vec<usize>, LayerUpdate)> = (updates.par_iter())
+            .map(|(_, update)| {
+                let slots = computed_slots(update, words);
+                let rows = update.rows(slots.iter().map(|slot| slot * words..(slot + 1) * words));
+                (slots, rows)
+            })
             .collect();
-        let updates: Vec<_> = (updates.iter().zip(&slots))
-            .map(|(&(brick, update), slots)| (brick, update, &slots[..]))
+        let updates: Vec<_> = (updates.iter().zip(&rows))
+            .map(|(&(brick, _), (slots, rows))| (brick, rows, &slots[..]))
             .collect();
         self.merge_bricks_at(&updates);
     }
 
-    /// [`MaskStore::merge_bricks`], each update with the slots that hold
-    /// its computed bits, in order (a fill that knows them spares the
-    /// scan of all [`BRICK_NODES`]); a brick with none is left alone.
+    /// [`MaskStore::merge_bricks`] for updates held by the slots they
+    /// touch: row `i` of an update (its words `i * words ..`) is slot
+    /// `slots[i]`, the slots in order, so that a fill that touched a few
+    /// of a brick's [`BRICK_NODES`] pays for those alone. A brick with no
+    /// slot is left alone; rows with no computed bit change nothing.
     pub fn merge_bricks_at(&mut self, updates: &[(IVec3, &LayerUpdate, &[usize])]) {
         use rayon::prelude::*;
         let (words, lights) = (self.words, self.lights);
@@ -365,9 +390,9 @@ impl MaskStore {
             .fold(
                 || (0, 0, KnownCounts::new(lights)),
                 |(mut new_nodes, mut found, mut known), (_, stored, update, slots)| {
-                    for &slot in slots.iter() {
+                    for (row, &slot) in slots.iter().enumerate() {
                         let merged =
-                            merge_slot(stored, &mut known, words, slot, update, slot * words);
+                            merge_slot(stored, &mut known, words, slot, update, row * words);
                         new_nodes += merged.became_a_node as usize;
                         found += merged.found;
                     }
@@ -1285,6 +1310,60 @@ mod known_count_tests {
                 let odd: u64 = counts.iter().skip(1).step_by(2).sum();
                 prop_assert_eq!(store.known_bits_of(&odd_lights), odd);
                 prop_assert_eq!(store.static_bits_found(), found);
+            }
+        }
+
+        /// Bricks merged together, in parallel, leave the store as
+        /// merging them one after another does: every bit, each brick's
+        /// revision and dynamic lights, and the counts the store keeps
+        /// (which a thread's share of the merge may take below zero).
+        #[test]
+        fn bricks_merged_together_equal_bricks_merged_in_turn(
+            edits in proptest::collection::vec(edit(), 0..40),
+            bits in proptest::collection::vec(
+                (-1..3i32, 0..BRICK_NODES, 0..2usize, proptest::array::uniform4(any::<u64>())),
+                0..200,
+            ),
+        ) {
+            let mut store = MaskStore::new(70);
+            for edit in edits {
+                apply(&mut store, edit);
+            }
+            let words = store.words();
+            let mut updates: Vec<(IVec3, LayerUpdate)> = (-1..3)
+                .map(|brick| (IVec3::splat(brick), LayerUpdate::zeroed(BRICK_NODES * words)))
+                .collect();
+            for (brick, slot, word, [static_computed, visible, dynamic_computed, occluded]) in bits {
+                let update = &mut updates[(brick + 1) as usize].1;
+                let at = slot * words + word;
+                // Lights 0..70 only.
+                let lights = if word == 0 { u64::MAX } else { (1 << (70 - 64)) - 1 };
+                let (static_computed, dynamic_computed) = (static_computed & lights, dynamic_computed & lights);
+                update.static_computed[at] |= static_computed;
+                update.static_visible[at] |= visible & static_computed;
+                update.dynamic_computed[at] |= dynamic_computed;
+                update.dynamic_occluded[at] |= occluded & dynamic_computed;
+            }
+            let mut in_turn = store.clone();
+            for (brick, update) in &updates {
+                in_turn.merge_bricks(&[(*brick, update)]);
+            }
+            let together = {
+                let named: Vec<_> = updates.iter().map(|(brick, update)| (*brick, update)).collect();
+                store.merge_bricks(&named);
+                store
+            };
+            prop_assert_eq!(&together.known.per_light, &in_turn.known.per_light);
+            prop_assert_eq!(&recounted(&together)[..], &together.known.per_light[..]);
+            prop_assert_eq!(together.nodes_cached(), in_turn.nodes_cached());
+            prop_assert_eq!(together.static_bits_found(), in_turn.static_bits_found());
+            prop_assert_eq!(together.revision, in_turn.revision);
+            prop_assert_eq!(together.bricks.len(), in_turn.bricks.len());
+            for (brick, stored) in &together.bricks {
+                let other = &in_turn.bricks[brick];
+                prop_assert_eq!(&stored.nodes, &other.nodes);
+                prop_assert_eq!(&stored.dynamic_lights, &other.dynamic_lights);
+                prop_assert_eq!(stored.revision, other.revision);
             }
         }
 

@@ -103,10 +103,13 @@ struct Place {
 }
 
 impl Place {
-    /// The word and the bit of a brick's update that this place's bit is.
-    fn locate(&self, words: usize) -> (usize, u64) {
+    /// The word and the bit that this place's bit is in a brick's update
+    /// whose rows are `slots` (which hold this place's).
+    fn locate(&self, slots: &[usize], words: usize) -> (usize, u64) {
+        let row = (slots.binary_search(&(self.slot as usize)))
+            .expect("the update has a row for each place");
         let light = self.light as usize;
-        (self.slot as usize * words + light / 64, 1 << (light % 64))
+        (row * words + light / 64, 1 << (light % 64))
     }
 }
 
@@ -347,11 +350,8 @@ impl LightMesh {
             .zip(&fill.bricks)
             .filter(|(_, brick)| brick.has_groups())
             .map(|(demanded, brick)| {
-                (
-                    demanded.brick,
-                    brick.group_update(words),
-                    brick.group_slots(),
-                )
+                let slots = brick.touched_slots(&[]);
+                (demanded.brick, brick.group_update(words, &slots), slots)
             })
             .collect();
         let named: Vec<_> = (updates.iter())
@@ -412,7 +412,8 @@ impl LightMesh {
 /// One brick's bits from its fill, and what they count for the stats.
 struct BrickMerge {
     update: LayerUpdate,
-    /// The slots with a computed bit in `update`, in order.
+    /// The slots whose bits `update` holds, one row each
+    /// ([`MaskStore::merge_bricks_at`]).
     slots: Vec<usize>,
     segments: u64,
     nodes_computed: u64,
@@ -424,10 +425,11 @@ impl BrickFill {
     /// The brick's update from its shafts and `answers` (parallel to its
     /// segments), with `words` light words per node.
     fn merge(&self, demanded: &BrickDemand, answers: &[SegmentAnswer], words: usize) -> BrickMerge {
-        let mut update = self.group_update(words);
+        let slots = self.touched_slots(&self.segments);
+        let mut update = self.group_update(words, &slots);
         let mut segments = 0;
         for (segment, answer) in self.segments.iter().zip(answers) {
-            let (word, bit) = Place::from(segment).locate(words);
+            let (word, bit) = Place::from(segment).locate(&slots, words);
             if segment.test_static {
                 segments += 1;
                 update.static_computed[word] |= bit;
@@ -443,27 +445,22 @@ impl BrickFill {
                 }
             }
         }
-        let mut touched = self.group_slots();
-        touched.extend(self.segments.iter().map(|segment| segment.node as usize));
-        touched.sort_unstable();
-        touched.dedup();
-        let (mut slots, mut bits_computed) = (Vec::with_capacity(touched.len()), 0);
-        for slot in touched {
-            let range = slot * words..(slot + 1) * words;
+        // A segment whose tests were all skipped leaves its row empty.
+        let (mut nodes_computed, mut bits_computed) = (0, 0);
+        for row in 0..slots.len() {
+            let range = row * words..(row + 1) * words;
             let computed: u64 = (update.static_computed[range.clone()].iter())
                 .zip(&update.dynamic_computed[range])
                 .map(|(s, d)| (s | d).count_ones() as u64)
                 .sum();
-            if computed > 0 {
-                slots.push(slot);
-                bits_computed += computed;
-            }
+            nodes_computed += (computed > 0) as u64;
+            bits_computed += computed;
         }
         BrickMerge {
             update,
-            nodes_computed: slots.len() as u64,
             slots,
             segments,
+            nodes_computed,
             bits_computed,
             bits_needed: demanded.needed.iter().map(|w| w.count_ones() as u64).sum(),
         }
@@ -478,32 +475,34 @@ impl BrickFill {
             && self.dynamic_clear.is_empty())
     }
 
-    /// The slots whose bits the groups settled, in order, once each.
-    fn group_slots(&self) -> Vec<usize> {
+    /// The slots the brick's groups and `segments` touch, in order, once
+    /// each: the rows of its update.
+    fn touched_slots(&self, segments: &[Segment]) -> Vec<usize> {
         let places = [&self.static_clear, &self.static_hidden, &self.dynamic_clear];
         let mut slots: Vec<usize> = (places.iter().flat_map(|places| places.iter()))
             .map(|place| place.slot as usize)
+            .chain(segments.iter().map(|segment| segment.node as usize))
             .collect();
         slots.sort_unstable();
         slots.dedup();
         slots
     }
 
-    /// The brick's update from its groups alone: clear shafts and hiding
-    /// walls.
-    fn group_update(&self, words: usize) -> LayerUpdate {
-        let mut update = LayerUpdate::zeroed(BRICK_NODES * words);
+    /// The brick's update from its groups alone (clear shafts and hiding
+    /// walls), a row for each of `slots`, which hold the groups' own.
+    fn group_update(&self, words: usize, slots: &[usize]) -> LayerUpdate {
+        let mut update = LayerUpdate::zeroed(slots.len() * words);
         for place in &self.static_clear {
-            let (word, bit) = place.locate(words);
+            let (word, bit) = place.locate(slots, words);
             update.static_computed[word] |= bit;
             update.static_visible[word] |= bit;
         }
         for place in &self.static_hidden {
-            let (word, bit) = place.locate(words);
+            let (word, bit) = place.locate(slots, words);
             update.static_computed[word] |= bit;
         }
         for place in &self.dynamic_clear {
-            let (word, bit) = place.locate(words);
+            let (word, bit) = place.locate(slots, words);
             update.dynamic_computed[word] |= bit;
         }
         update
