@@ -36,8 +36,6 @@
 //! them by (`super::segments::Segment::sees`), and the store takes the
 //! same bits at the CPU's next wait, before anything reads it.
 
-use std::ops::Range;
-
 use glam::IVec3;
 use rustc_hash::FxHashMap;
 
@@ -218,21 +216,31 @@ impl LayerUpdate {
             dynamic_occluded: vec![0; len],
         }
     }
+}
 
-    /// The update made of `ranges` of this one's words, one after another.
-    fn rows(&self, ranges: impl Iterator<Item = Range<usize>> + Clone) -> LayerUpdate {
-        let take = |words: &[u64]| {
-            ranges
-                .clone()
-                .flat_map(|range| &words[range])
-                .copied()
-                .collect()
-        };
-        LayerUpdate {
-            static_computed: take(&self.static_computed),
-            static_visible: take(&self.static_visible),
-            dynamic_computed: take(&self.dynamic_computed),
-            dynamic_occluded: take(&self.dynamic_occluded),
+/// Which slots of a brick an update holds bits for, in order, and in
+/// which of its rows (a row is `words` words of each layer).
+#[derive(Clone, Copy, Debug)]
+pub enum UpdateRows<'a> {
+    /// A whole brick's update: row `slot` is slot `slot`; these slots
+    /// have bits.
+    EverySlot(&'a [usize]),
+    /// Row `i` is slot `slots[i]`.
+    Named(&'a [usize]),
+}
+
+impl UpdateRows<'_> {
+    fn slots(&self) -> &[usize] {
+        match self {
+            UpdateRows::EverySlot(slots) | UpdateRows::Named(slots) => slots,
+        }
+    }
+
+    /// The row of the `index`-th slot, `slot`.
+    fn row(&self, index: usize, slot: usize) -> usize {
+        match self {
+            UpdateRows::EverySlot(_) => slot,
+            UpdateRows::Named(_) => index,
         }
     }
 }
@@ -355,42 +363,38 @@ impl MaskStore {
     pub fn merge_bricks(&mut self, updates: &[(IVec3, &LayerUpdate)]) {
         use rayon::prelude::*;
         let words = self.words;
-        let rows: Vec<(Vec<usize>, LayerUpdate)> = (updates.par_iter())
-            .map(|(_, update)| {
-                let slots = computed_slots(update, words);
-                let rows = update.rows(slots.iter().map(|slot| slot * words..(slot + 1) * words));
-                (slots, rows)
-            })
+        let slots: Vec<Vec<usize>> = (updates.par_iter())
+            .map(|(_, update)| computed_slots(update, words))
             .collect();
-        let updates: Vec<_> = (updates.iter().zip(&rows))
-            .map(|(&(brick, _), (slots, rows))| (brick, rows, &slots[..]))
+        let updates: Vec<_> = (updates.iter().zip(&slots))
+            .map(|(&(brick, update), slots)| (brick, update, UpdateRows::EverySlot(slots)))
             .collect();
         self.merge_bricks_at(&updates);
     }
 
-    /// [`MaskStore::merge_bricks`] for updates held by the slots they
-    /// touch: row `i` of an update (its words `i * words ..`) is slot
-    /// `slots[i]`, the slots in order, so that a fill that touched a few
-    /// of a brick's [`BRICK_NODES`] pays for those alone. A brick with no
-    /// slot is left alone; rows with no computed bit change nothing.
-    pub fn merge_bricks_at(&mut self, updates: &[(IVec3, &LayerUpdate, &[usize])]) {
+    /// [`MaskStore::merge_bricks`] for updates that say which slots
+    /// they hold bits for ([`UpdateRows`]), so that a fill that touched a
+    /// few of a brick's [`BRICK_NODES`] pays for those alone. A brick with
+    /// no slot is left alone; a row with no computed bit changes nothing.
+    pub fn merge_bricks_at(&mut self, updates: &[(IVec3, &LayerUpdate, UpdateRows)]) {
         use rayon::prelude::*;
         let (words, lights) = (self.words, self.lights);
         let mut taken = Vec::new();
-        for &(brick, update, slots) in updates {
-            if slots.is_empty() {
+        for &(brick, update, rows) in updates {
+            if rows.slots().is_empty() {
                 continue;
             }
             self.revision += 1;
             let mut stored = (self.bricks.remove(&brick)).unwrap_or_else(|| Brick::new(words));
             stored.revision = self.revision;
-            taken.push((brick, stored, update, slots));
+            taken.push((brick, stored, update, rows));
         }
         let (new_nodes, found, known) = (taken.par_iter_mut())
             .fold(
                 || (0, 0, KnownCounts::new(lights)),
-                |(mut new_nodes, mut found, mut known), (_, stored, update, slots)| {
-                    for (row, &slot) in slots.iter().enumerate() {
+                |(mut new_nodes, mut found, mut known), (_, stored, update, rows)| {
+                    for (index, &slot) in rows.slots().iter().enumerate() {
+                        let row = rows.row(index, slot);
                         let merged =
                             merge_slot(stored, &mut known, words, slot, update, row * words);
                         new_nodes += merged.became_a_node as usize;

@@ -29,7 +29,7 @@ use rayon::prelude::*;
 
 use super::demand::{BrickDemand, Demand};
 use super::fill::{group_box, wall_hides_box, MIN_SHAFT_NODES};
-use super::masks::{join, LayerUpdate, BRICK_NODES};
+use super::masks::{join, LayerUpdate, UpdateRows, BRICK_NODES};
 use super::{LightMesh, LightMeshError, LightMeshStats};
 use crate::accel::shaft::Shaft;
 use crate::accel::World;
@@ -355,7 +355,7 @@ impl LightMesh {
             })
             .collect();
         let named: Vec<_> = (updates.iter())
-            .map(|(brick, update, slots)| (*brick, update, &slots[..]))
+            .map(|(brick, update, slots)| (*brick, update, UpdateRows::Named(slots)))
             .collect();
         self.masks.merge_bricks_at(&named);
         let bricks = demand.bricks.iter().map(|demanded| demanded.brick);
@@ -401,7 +401,11 @@ impl LightMesh {
             stats.bits_computed += merge.bits_computed;
             stats.bits_reused += merge.bits_needed - merge.bits_computed;
             if merge.bits_computed > 0 {
-                updates.push((demanded.brick, &merge.update, &merge.slots[..]));
+                updates.push((
+                    demanded.brick,
+                    &merge.update,
+                    UpdateRows::Named(&merge.slots),
+                ));
             }
         }
         self.masks.merge_bricks_at(&updates);
