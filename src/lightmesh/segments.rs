@@ -472,18 +472,21 @@ impl BrickFill {
 }
 
 impl BrickFill {
+    /// The places whose bits shafts and walls settled: static clear,
+    /// static hidden, dynamic clear.
+    fn group_places(&self) -> [&[Place]; 3] {
+        [&self.static_clear, &self.static_hidden, &self.dynamic_clear]
+    }
+
     /// Whether shafts or walls settled any of the brick's bits.
     fn has_groups(&self) -> bool {
-        !(self.static_clear.is_empty()
-            && self.static_hidden.is_empty()
-            && self.dynamic_clear.is_empty())
+        self.group_places().iter().any(|places| !places.is_empty())
     }
 
     /// The slots the brick's groups and `segments` touch, in order, once
     /// each: the rows of its update.
     fn touched_slots(&self, segments: &[Segment]) -> Vec<usize> {
-        let places = [&self.static_clear, &self.static_hidden, &self.dynamic_clear];
-        let mut slots: Vec<usize> = (places.iter().flat_map(|places| places.iter()))
+        let mut slots: Vec<usize> = (self.group_places().into_iter().flatten())
             .map(|place| place.slot as usize)
             .chain(segments.iter().map(|segment| segment.node as usize))
             .collect();

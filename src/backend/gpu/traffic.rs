@@ -51,8 +51,8 @@ pub struct GpuTraffic {
     /// The light mesh's node-to-light segments the GPU traced for the
     /// fill (`super::fill`): the fill's work that crossed to the GPU.
     pub segments_traced: u64,
-    /// Seconds the CPU spent blocked in those waits: from submitting to
-    /// holding the bytes. A frame's `seconds` less this is what the CPU
+    /// Seconds the CPU spent blocked in those waits: from each wait's
+    /// call (its copies recorded, then submitted) to holding the bytes. A frame's `seconds` less this is what the CPU
     /// spent on its own work, which on a fast GPU is most of the frame.
     pub wait_seconds: f64,
 }
