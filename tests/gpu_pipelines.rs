@@ -184,6 +184,8 @@ fn a_run_compiles_what_its_frames_need_before_the_first() {
         "gather_points",
         "patch_pool",
         "fill_segments",
+        "summarise_tiles",
+        "summarise_around",
         "light_mesh",
     ] {
         assert!(prepared.contains(&needed), "{needed} in {prepared:?}");

@@ -467,6 +467,98 @@ fn many_lamps_sized_by_their_blockers_give_the_cpus_frame_on_the_gpu() {
     }
 }
 
+/// The GPU settles a point's set by the summary of the nodes around a tile
+/// (`agreement.wgsl`) where they all agree on its lights, instead of
+/// walking it, and must get what the walk gets: the CPU's bits. The floor
+/// of 33 lights (two mask words) holds a blocker whose top and edges lie
+/// on lattice planes, a closed box (enclosed nodes, whose lights hidden
+/// from every node no summary may settle), and a tilted quad whose normal
+/// points down two axes (the tile is then chosen by the cell's first
+/// corner on those). Below kI = 2 a half-ball may hold no node, and no
+/// point is settled.
+#[test]
+fn points_settled_by_tile_summaries_on_the_gpu_get_the_cpus_bits() {
+    let h = 0.05f32;
+    let mut scene = lit_floor();
+    let m = add_material(&mut scene, lambert(Vec3::splat(0.5)));
+    let origin = lmanim::lightmesh::lattice::GENERAL_POSITION * h;
+    let (x0, y, z0) = (origin.x - h, 2.0 * (origin.y + 2.0 * h), origin.z - h);
+    let on_planes = [
+        Vec3::new(x0, y, z0 + 2.0 * h),
+        Vec3::new(x0 + 2.0 * h, y, z0 + 2.0 * h),
+        Vec3::new(x0 + 2.0 * h, y, z0),
+        Vec3::new(x0, y, z0),
+    ];
+    let tilted = [
+        Vec3::new(1.0, 0.6, 1.8),
+        Vec3::new(1.8, 0.2, 1.8),
+        Vec3::new(1.8, 0.6, 1.0),
+        Vec3::new(1.0, 1.0, 1.0),
+    ];
+    add_quads(&mut scene, &[on_planes, tilted], 1, m);
+    let (lo, hi) = (Vec3::new(-1.6, 0.0, -1.6), Vec3::new(-0.9, 0.5, -0.9));
+    let closed = [
+        [
+            Vec3::new(lo.x, hi.y, hi.z),
+            Vec3::new(hi.x, hi.y, hi.z),
+            Vec3::new(hi.x, hi.y, lo.z),
+            Vec3::new(lo.x, hi.y, lo.z),
+        ],
+        [
+            Vec3::new(lo.x, lo.y, hi.z),
+            Vec3::new(hi.x, lo.y, hi.z),
+            Vec3::new(hi.x, hi.y, hi.z),
+            Vec3::new(lo.x, hi.y, hi.z),
+        ],
+        [
+            Vec3::new(hi.x, lo.y, lo.z),
+            Vec3::new(lo.x, lo.y, lo.z),
+            Vec3::new(lo.x, hi.y, lo.z),
+            Vec3::new(hi.x, hi.y, lo.z),
+        ],
+        [
+            Vec3::new(hi.x, lo.y, hi.z),
+            Vec3::new(hi.x, lo.y, lo.z),
+            Vec3::new(hi.x, hi.y, lo.z),
+            Vec3::new(hi.x, hi.y, hi.z),
+        ],
+        [
+            Vec3::new(lo.x, lo.y, lo.z),
+            Vec3::new(lo.x, lo.y, hi.z),
+            Vec3::new(lo.x, hi.y, hi.z),
+            Vec3::new(lo.x, hi.y, lo.z),
+        ],
+    ];
+    add_quads(&mut scene, &closed, 1, m);
+    for i in 0..31 {
+        let angle = i as f32 * 0.37;
+        let height = 1.5 + (i % 7) as f32 * 0.2;
+        let position = Vec3::new(angle.cos() * 2.5, height, angle.sin() * 2.5);
+        add_lamp(&mut scene, 0.3, position, 0.05);
+    }
+    for ki in [1.5, 2.0, 2.5] {
+        let settings = with_method(settings(32, 32), Method::Lmm1, h, ki);
+        let on_cpu = render(scene.clone(), &settings);
+        let Some((mut gpu, exact)) = gpu::backend_to_compare() else {
+            return;
+        };
+        let (on_gpu, stats) = render_on(&mut gpu, scene.clone(), &settings);
+        match exact {
+            true => assert!(on_gpu == on_cpu, "kI {ki}: the GPU's frame differs"),
+            false => assert!(on_gpu.pixels.iter().all(|p| p.is_finite())),
+        }
+        let settled = stats.lightmesh.expect("light-mesh stats").points_settled;
+        let points = stats.shading_points;
+        match ki < 2.0 {
+            true => assert_eq!(settled, 0, "kI {ki}: no summary may settle a point"),
+            false => assert!(
+                4 * settled > points,
+                "kI {ki}: {settled} of {points} points settled"
+            ),
+        }
+    }
+}
+
 #[test]
 fn a_lattice_too_fine_for_the_memory_limit_is_a_clear_error() {
     let mut settings = with_method(settings(64, 64), Method::Lmm1, 1e-4, 2.5);

@@ -50,7 +50,7 @@ use super::masks::{split, BrickCache, BRICK_EDGE};
 
 /// Nodes along each edge of a tile: a divisor of [`BRICK_EDGE`], so a
 /// tile lies in one brick.
-const TILE_EDGE: i32 = 4;
+pub const TILE_EDGE: i32 = 4;
 const TILE_SHIFT: i32 = TILE_EDGE.trailing_zeros() as i32;
 /// The most mesh steps per step of a summarised lattice (the wide set's):
 /// a tile's nodes then still lie in one brick.
@@ -63,7 +63,7 @@ const _: () = assert!(BRICK_EDGE % (TILE_EDGE * MAX_STEPS) == 0);
 /// of the tangent plane and at most 0.94·r from the point (a smooth weight
 /// of 4095·(1 − 0.94²)² ≥ 68). Below it a set may be empty, which formula
 /// (1) answers instead; the summary cannot tell, so it is not used there.
-const SMALLEST_KI: f32 = 2.0;
+pub const SMALLEST_KI: f32 = 2.0;
 
 /// The points that meet a tile before its summary is made, the last of
 /// them included: 4 keeps a street seen from the pavement as fast as

@@ -10,7 +10,7 @@
 //! inside closed geometry, which its formula (2) leaves out. Who else
 //! writes the masks, and when, is in [`masks`].
 
-mod agreement;
+pub(crate) mod agreement;
 mod brick_codec;
 pub mod cache;
 pub mod demand;

@@ -12,8 +12,9 @@ use super::traffic::Traffic;
 /// Storage buffers one pass binds at most: formula (2)'s, which binds its
 /// parameters (storage, not uniform: see `common.wgsl`), its points and
 /// answers, the flat world's seven arrays, the lights, the points'
-/// reaching lights, the mask pool, its directory and its counters.
-pub const STORAGE_BUFFERS: u32 = 15;
+/// reaching lights, the mask pool, its directory, its tile summaries and
+/// its counters.
+pub const STORAGE_BUFFERS: u32 = 16;
 /// Storage buffers formula (2) binds when it keeps its terms per light
 /// layer (`--aovs light`): one more, the points' layer sums. An adapter
 /// that binds fewer renders everything else.

@@ -21,7 +21,7 @@
 
 use crate::lightmesh::kernel::Kernel;
 use crate::lightmesh::penumbra::{self, Penumbra};
-use crate::lightmesh::{enclosure, faint, lamp_disk, lattice, masks, wide_ball};
+use crate::lightmesh::{agreement, enclosure, faint, lamp_disk, lattice, masks, wide_ball};
 use crate::plan::Shadows;
 
 /// Declares each constant once: as a Rust `pub const` and as a line of
@@ -104,6 +104,10 @@ contract! {
     OBJECTS: u32 = 15;
     /// The coverage pass's copies of the points it does not serve.
     GATHERED: u32 = 16;
+    /// The pool's tile summaries (`agreement.wgsl`): formula (2) reads
+    /// those of the nodes around each tile, which are made from those of
+    /// each tile's own nodes.
+    TILE_SUMMARIES: u32 = 24;
     /// The points' sums per light layer (`light_layers.wgsl`,
     /// `accumulate_layers.wgsl`).
     POINT_LAYERS: u32 = 16;
@@ -159,9 +163,11 @@ contract! {
     COUNT_FALLBACK: u32 = 3;
     /// `PointCounts::blocker_rays`.
     COUNT_BLOCKER_RAYS: u32 = 4;
+    /// `PointCounts::settled`.
+    COUNT_SETTLED: u32 = 5;
     /// The word after the counts: points whose loops the adapter cut
     /// short.
-    LOOPS_CUT_SHORT: u32 = 2 * (COUNT_BLOCKER_RAYS + 1);
+    LOOPS_CUT_SHORT: u32 = 2 * (COUNT_SETTLED + 1);
     /// Words of formula (2)'s counters.
     LIGHT_MESH_COUNTERS: u32 = LOOPS_CUT_SHORT + 1;
 
@@ -254,6 +260,22 @@ contract! {
     KEPT_WORDS: u32 = (MAX_SPAN as u32).pow(3).div_ceil(32);
     /// Mesh steps per step of the wide set's lattice.
     WIDE_STEPS: i32 = wide_ball::STEPS;
+    /// Node coordinates stay below this in magnitude.
+    MAX_NODE_COORDINATE: i32 = lattice::MAX_NODE_COORDINATE as i32;
+
+    // Tile summaries (`lightmesh/agreement.rs`, `agreement.wgsl`).
+    /// Nodes along each edge of a tile.
+    TILE_EDGE: i32 = agreement::TILE_EDGE;
+    TILE_SHIFT: u32 = TILE_EDGE.trailing_zeros();
+    /// Tiles of the mesh's lattice along each edge of a brick.
+    BRICK_TILES: u32 = BRICK_EDGE / TILE_EDGE as u32;
+    /// A slot's summary of its brick's one tile on the wide set's lattice,
+    /// after those of its tiles on the mesh's.
+    WIDE_TILE: u32 = BRICK_TILES * BRICK_TILES * BRICK_TILES;
+    /// Summaries per pool slot.
+    TILES_PER_SLOT: u32 = WIDE_TILE + 1;
+    /// The smallest kI whose points a summary may settle.
+    SUMMARY_SMALLEST_KI: u32 = agreement::SMALLEST_KI as u32;
     /// The finest lattice level a lamp's penumbra is sized on.
     FINEST_LEVEL: i32 = penumbra::FINEST_LEVEL;
     /// The coarsest.
@@ -268,6 +290,11 @@ contract! {
     /// LMM1's probe directions per node (`enclosure::PROBES`).
     PROBE_COUNT: u32 = enclosure::PROBES.len() as u32;
 }
+
+// A slot's wide tile is its whole brick, every other node, and a kI the
+// summaries take crosses as the integer it is.
+const _: () = assert!(TILE_EDGE * WIDE_STEPS == BRICK_EDGE as i32);
+const _: () = assert!(SUMMARY_SMALLEST_KI as f32 == agreement::SMALLEST_KI);
 
 /// A constant as WGSL declares it.
 fn declaration(name: &str, value: impl WgslInteger) -> String {

@@ -231,7 +231,7 @@ impl Frame<'_> {
                 storage(context, "direct light", &direct)?
             }
             DirectMethod::LightMesh(light_mesh) => {
-                let reach = light_mesh.prepare(
+                let prepared = light_mesh.prepare(
                     &pipelines.light_mesh,
                     (&pipelines.fill, &pipelines.probes),
                     context,
@@ -250,7 +250,7 @@ impl Frame<'_> {
                     scene,
                     &self.lights,
                     level,
-                    &reach,
+                    &prepared,
                     (&direct, layers.as_ref()),
                 );
                 direct

@@ -19,7 +19,10 @@
 //! band's end). So the masks the shader reads are the CPU backend's bit
 //! for bit, and what runs on the GPU is the
 //! per-point work: the half-ball, LMM's point-to-node segments, the
-//! counts and Omega, and formula (1) where the set is empty.
+//! counts and Omega, and formula (1) where the set is empty. Before it,
+//! the pool's tiles are summarised (`tile_summaries.wgsl`), so that a
+//! point whose nodes all agree on its lights skips the walk of its set
+//! (`agreement.wgsl`, the CPU's `lightmesh::agreement`).
 
 use std::time::Instant;
 
@@ -28,15 +31,15 @@ use glam::IVec3;
 use super::context::{GpuContext, GpuError};
 use super::contract::{
     COUNTS, COUNT_BLOCKER_RAYS, COUNT_CANDIDATES, COUNT_FALLBACK, COUNT_INTERPOLATION_SET,
-    COUNT_POINT_TO_NODE_TESTS, DIRECTORY, FLAGS, GATHERED, GATHER_SOURCE, ITEMS, LIGHTS,
-    LIGHT_MESH_COUNTERS, LOOPS_CUT_SHORT, POOL, REACH,
+    COUNT_POINT_TO_NODE_TESTS, COUNT_SETTLED, DIRECTORY, FLAGS, GATHERED, GATHER_SOURCE, ITEMS,
+    LIGHTS, LIGHT_MESH_COUNTERS, LOOPS_CUT_SHORT, POOL, REACH, TILES_PER_SLOT, TILE_SUMMARIES,
 };
 use super::direct::FrameLights;
 use super::enclosure::{ProbeAnswers, ProbePass, ProbeSite};
 use super::fill::{FillAnswers, FillPass, FillTable, SEGMENTS_PER_WAIT};
 use super::layered::{LayeredPass, PointLayers};
 use super::mask_pool::MaskPool;
-use super::pass::{answer_buffer, Dispatch, WorldPass, WorldUse};
+use super::pass::{answer_buffer, Dispatch, WorldPass, WorldUse, BATCH};
 use super::recording::{Downloaded, Downloads, Part, Recording};
 use super::scene::{storage, GpuScene};
 use super::shaders::Entry;
@@ -60,11 +63,14 @@ type Counters = [u32; LIGHT_MESH_COUNTERS as usize];
 
 /// The light mesh's pipelines, made once per run: coverage (which points
 /// the pool serves), gathering the points it does not, writing the words
-/// of the pool that changed, and formula (2).
+/// of the pool that changed, summarising its tiles (their own nodes, then
+/// the nodes around them), and formula (2).
 pub struct LightMeshPasses {
     pub(super) coverage: WorldPass,
     pub(super) gather: WorldPass,
     pub(super) patch: WorldPass,
+    pub(super) summarise_tiles: WorldPass,
+    pub(super) summarise_around: WorldPass,
     pub(super) shade: LayeredPass,
 }
 
@@ -86,11 +92,25 @@ impl LightMeshPasses {
                 &[],
             ),
             patch: WorldPass::new(context, Entry::PatchPool, WorldUse::None, &[], &[]),
+            summarise_tiles: WorldPass::new(
+                context,
+                Entry::SummariseTiles,
+                WorldUse::None,
+                &[DIRECTORY, POOL],
+                &[],
+            ),
+            summarise_around: WorldPass::new(
+                context,
+                Entry::SummariseAround,
+                WorldUse::None,
+                &[DIRECTORY, TILE_SUMMARIES],
+                &[],
+            ),
             shade: LayeredPass::new(
                 context,
                 (Entry::LightMesh, Entry::LightMeshLayers),
                 WorldUse::Traces,
-                &[LIGHTS, REACH, DIRECTORY, POOL],
+                &[LIGHTS, REACH, DIRECTORY, POOL, TILE_SUMMARIES],
                 &[COUNTS],
             ),
         }
@@ -151,10 +171,12 @@ pub struct LightMeshParts {
     fill: FillParts,
 }
 
-/// The reaching lights of a level's points, as the coverage pass made
-/// them, for formula (2).
-pub struct LevelReach {
+/// What formula (2) reads at a level's points besides the pool: their
+/// reaching lights, as the coverage pass made them, and the summaries of
+/// the nodes around each tile, made after the level's fill.
+pub struct PreparedLevel {
     reach: wgpu::Buffer,
+    summaries: wgpu::Buffer,
 }
 
 impl<'m> LightMeshShading<'m> {
@@ -188,7 +210,8 @@ impl<'m> LightMeshShading<'m> {
     /// them), after the level's one wait (where the pass had too little
     /// room to copy them all, one more gathers them); the bits left are
     /// traced on the GPU, and the nodes' enclosure probed, into the pool,
-    /// with no wait. Returns the points' reaching lights.
+    /// with no wait, and the pool's tiles summarised. Returns what formula
+    /// (2) reads besides the pool.
     #[allow(clippy::too_many_arguments)]
     pub fn prepare(
         &mut self,
@@ -201,7 +224,7 @@ impl<'m> LightMeshShading<'m> {
         level: &LevelBuffers,
         recording: &mut Recording,
         stats: &mut FrameStats,
-    ) -> Result<LevelReach, RenderError> {
+    ) -> Result<PreparedLevel, RenderError> {
         let start = Instant::now();
         let p2n = self.point_to_node_tests;
         let (edits, changed) = self.pool.refresh(context, self.mesh, p2n)?;
@@ -286,7 +309,46 @@ impl<'m> LightMeshShading<'m> {
             answers,
             probes,
         });
-        Ok(reach)
+        let summaries = self.summarise(passes, context, scene, recording)?;
+        Ok(PreparedLevel { reach, summaries })
+    }
+
+    /// Records the tile summaries of every brick the pool holds, from the
+    /// bits the level's shading reads (recorded after its fill and probes):
+    /// each tile's own nodes', then the nodes' around each tile, which
+    /// formula (2) reads. LMM's sets, which no summary knows, get an empty
+    /// buffer.
+    fn summarise(
+        &self,
+        passes: &LightMeshPasses,
+        context: &GpuContext,
+        scene: &GpuScene,
+        recording: &mut Recording,
+    ) -> Result<wgpu::Buffer, RenderError> {
+        let light_words = MaskPool::light_words(self.mesh.masks().lights());
+        let per_slot = TILES_PER_SLOT as usize * (2 * light_words + 1);
+        let slots = match self.point_to_node_tests {
+            true => 0,
+            false => self.pool.capacity(),
+        };
+        let own = answer_buffer::<u32>(context, "tile summaries", per_slot * slots)?;
+        let around = answer_buffer::<u32>(context, "summaries around tiles", per_slot * slots)?;
+        if slots == 0 {
+            return Ok(around);
+        }
+        let (pool, directory) = self.pool.buffers();
+        // The passes' items are the directory's entries, read through
+        // DIRECTORY; each invocation takes every BATCH-th from its own.
+        let dispatch = Dispatch::new(scene, self.pool.directory_entries().min(BATCH));
+        let reads = [(ITEMS, directory), (DIRECTORY, directory), (POOL, pool)];
+        (passes.summarise_tiles).record(context, recording.encoder(), dispatch, &reads, &own);
+        let reads = [
+            (ITEMS, directory),
+            (DIRECTORY, directory),
+            (TILE_SUMMARIES, &own),
+        ];
+        (passes.summarise_around).record(context, recording.encoder(), dispatch, &reads, &around);
+        Ok(around)
     }
 
     /// Gives the CPU's store the last fill's answers, which a wait brought
@@ -342,7 +404,7 @@ impl<'m> LightMeshShading<'m> {
         lights: &FrameLights,
         level: &LevelBuffers,
         recording: &mut Recording,
-    ) -> Result<(LevelReach, Vec<SurfacePoint>, Vec<u32>), RenderError> {
+    ) -> Result<(wgpu::Buffer, Vec<SurfacePoint>, Vec<u32>), RenderError> {
         let light_words = MaskPool::light_words(self.mesh.masks().lights());
         // Per point, its reaching lights, then its lamps that are not faint.
         let reach_words = level.count * 2 * light_words;
@@ -393,7 +455,7 @@ impl<'m> LightMeshShading<'m> {
         // The demand takes the points in the level's order, however the
         // GPU copied them.
         records.sort_unstable_by_key(SurfacePoint::level_index);
-        Ok((LevelReach { reach }, records, read_slots.to_vec()))
+        Ok((reach, records, read_slots.to_vec()))
     }
 
     /// The points of `level` at `indices`, read back: those the pool does
@@ -431,16 +493,17 @@ impl<'m> LightMeshShading<'m> {
         scene: &GpuScene,
         lights: &FrameLights,
         level: &LevelBuffers,
-        reach: &LevelReach,
+        prepared: &PreparedLevel,
         (direct, layers): (&wgpu::Buffer, Option<&PointLayers>),
     ) {
         let (slots, directory) = self.pool.buffers();
         let reads = [
             (ITEMS, &level.points),
             (LIGHTS, lights.buffer()),
-            (REACH, &reach.reach),
+            (REACH, &prepared.reach),
             (DIRECTORY, directory),
             (POOL, slots),
+            (TILE_SUMMARIES, &prepared.summaries),
             (COUNTS, &self.counts),
         ];
         let dispatch = level.dispatch(scene).with_lights(lights.count());
@@ -500,8 +563,7 @@ impl<'m> LightMeshShading<'m> {
             interp_set: pair(COUNT_INTERPOLATION_SET),
             p2n_tests: pair(COUNT_POINT_TO_NODE_TESTS),
             fallback: pair(COUNT_FALLBACK),
-            // The shader walks every point's half-ball.
-            settled: 0,
+            settled: pair(COUNT_SETTLED),
             blocker_rays: pair(COUNT_BLOCKER_RAYS),
             blocker_rays_remembered: 0,
             shadow_rays: Default::default(),

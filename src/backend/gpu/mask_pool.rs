@@ -419,6 +419,11 @@ impl MaskPool {
         self.capacity
     }
 
+    /// Entries of the directory, empty ones included.
+    pub fn directory_entries(&self) -> usize {
+        (self.directory.as_ref()).map_or(0, |(header, _)| header.entry_mask as usize + 1)
+    }
+
     /// The slots and the directory, for binding.
     pub fn buffers(&self) -> (&wgpu::Buffer, &wgpu::Buffer) {
         let (_, directory) = self

@@ -91,6 +91,9 @@ impl Pipelines {
             FrameMethod::LightMesh { .. } => {
                 let mesh = &self.light_mesh;
                 passes.extend([&mesh.coverage, &mesh.gather, &mesh.patch, &self.fill.pass]);
+                if !method.tests_point_to_node() {
+                    passes.extend([&mesh.summarise_tiles, &mesh.summarise_around]);
+                }
                 if !method.tests_point_to_node() && probe_site == ProbeSite::Gpu {
                     passes.push(&self.probes.pass);
                 }

@@ -70,8 +70,8 @@ impl Arithmetic {
 
 /// The compute entry points: camera rays, the two ray queries, shading
 /// points, formula (1), formula (2) with its coverage of the points and
-/// the gathering of those it does not cover, the light mesh's fill and
-/// enclosure probes, the Whitted recursion's rays and their
+/// the gathering of those it does not cover, the light mesh's fill,
+/// enclosure probes and tile summaries, the Whitted recursion's rays and their
 /// compaction, and the film; formula (1) and (2) again keeping their
 /// terms per light layer, and the AOV film (camera hits, light layers),
 /// for `--aovs`.
@@ -87,6 +87,8 @@ pub enum Entry {
     PatchPool,
     FillSegments,
     EnclosureProbes,
+    SummariseTiles,
+    SummariseAround,
     LightMesh,
     Scatter,
     ScanBlocks,
@@ -101,7 +103,7 @@ pub enum Entry {
 }
 
 impl Entry {
-    pub const ALL: [Entry; 21] = [
+    pub const ALL: [Entry; 23] = [
         Entry::CameraRays,
         Entry::ClosestHit,
         Entry::AnyHit,
@@ -112,6 +114,8 @@ impl Entry {
         Entry::PatchPool,
         Entry::FillSegments,
         Entry::EnclosureProbes,
+        Entry::SummariseTiles,
+        Entry::SummariseAround,
         Entry::LightMesh,
         Entry::Scatter,
         Entry::ScanBlocks,
@@ -149,6 +153,8 @@ impl Entry {
             Entry::PatchPool => "patch_pool",
             Entry::FillSegments => "fill_segments",
             Entry::EnclosureProbes => "enclosure_probes",
+            Entry::SummariseTiles => "summarise_tiles",
+            Entry::SummariseAround => "summarise_around",
             Entry::LightMesh | Entry::LightMeshLayers => "light_mesh",
             Entry::Scatter => "scatter",
             Entry::ScanBlocks => "scan_blocks",
@@ -220,8 +226,21 @@ const ENCLOSURE_PROBES: [&str; 4] = [
     LEVEL_BRICKS,
     include_str!("shaders/enclosure_probes.wgsl"),
 ];
+/// What the nodes around each tile agree on (`lightmesh/agreement.rs`).
+const AGREEMENT: &str = include_str!("shaders/agreement.wgsl");
+/// The pool's tile summaries, made after each level's fill.
+const TILE_SUMMARIES: [&str; 8] = [
+    VECTOR,
+    SURFACE_POINT,
+    SCHLICK,
+    OMEGA,
+    LATTICE,
+    LIGHT_MESH_NODES,
+    AGREEMENT,
+    include_str!("shaders/tile_summaries.wgsl"),
+];
 /// Formula (2), which falls back to formula (1).
-const LIGHT_MESH: [&str; 8] = [
+const LIGHT_MESH: [&str; 9] = [
     VECTOR,
     SURFACE_POINT,
     SCHLICK,
@@ -229,6 +248,7 @@ const LIGHT_MESH: [&str; 8] = [
     FORMULA_ONE,
     LATTICE,
     LIGHT_MESH_NODES,
+    AGREEMENT,
     include_str!("shaders/light_mesh.wgsl"),
 ];
 /// What the passes that trace share: the world and its traversal.
@@ -274,6 +294,7 @@ pub fn source(entry: Entry, arithmetic: Arithmetic) -> String {
         Entry::PatchPool => (&[], &[include_str!("shaders/patch_pool.wgsl")]),
         Entry::FillSegments => (&TRACING, &FILL_SEGMENTS),
         Entry::EnclosureProbes => (&TRACING, &ENCLOSURE_PROBES),
+        Entry::SummariseTiles | Entry::SummariseAround => (&[], &TILE_SUMMARIES),
         Entry::LightMesh | Entry::LightMeshLayers => (&TRACING, &LIGHT_MESH),
         Entry::Scatter => (
             &[],

@@ -5,9 +5,11 @@
 // point asks for), then for each light in light order its Omega times
 // the share of kept nodes that see it. An empty set falls back to
 // formula (1). Node masks come from the pool (`mask_pool.rs`), found
-// through the directory. Under `auto` a frame may also hold lights that
-// formula (1) shades (hard and unshadowed ones): their terms come first,
-// in light order, then formula (2)'s, as the CPU backend sums them.
+// through the directory; a point whose nodes all agree on its lights
+// takes their answer from the tile summaries instead (`agreement.wgsl`).
+// Under `auto` a frame may also hold lights that formula (1) shades (hard
+// and unshadowed ones): their terms come first, in light order, then
+// formula (2)'s, as the CPU backend sums them.
 //
 // The half-ball's tests round as the CPU's rows of eight lanes do, and
 // the shares are integer sums of the kernel's integer weights
@@ -25,7 +27,7 @@
 // them that is not faint (`light_mesh_coverage.wgsl`).
 @group(0) @binding(REACH) var<storage, read> reach: array<u32>;
 // Candidates, interpolation-set sizes, point-to-node segments, fallback
-// points and blocker rays, each as a (low, high) pair of u32; then the
+// points, blocker rays and points settled by a summary, each as a (low, high) pair of u32; then the
 // points whose loops the adapter cut short (the contract's COUNT_* and
 // LOOPS_CUT_SHORT).
 @group(0) @binding(COUNTS) var<storage, read_write> counts: array<atomic<u32>, LIGHT_MESH_COUNTERS>;
@@ -90,9 +92,10 @@ fn wide_kept(mask: NodeMask, reach_base: u32) -> bool {
 }
 
 // `WideScratch::look`, word `word`: the lamps of `asked` on which the wide
-// set's kept nodes disagree.
-fn wide_disagreements(ball: HalfBall, reach_base: u32, word: u32, asked: u32) -> u32 {
-    if asked == 0u {
+// set's kept nodes disagree; none where the summary around the point's
+// wide tile (`around`) settles them all.
+fn wide_disagreements(ball: HalfBall, around: u32, reach_base: u32, word: u32, asked: u32) -> u32 {
+    if asked == 0u || (around != NO_SUMMARY && settles(around, word, asked)) {
         return 0u;
     }
     var all = asked;
@@ -181,6 +184,47 @@ fn tally(ball: HalfBall, origin: vec3<f32>, reach_base: u32, word: u32, settle: 
         }
     }
     return t;
+}
+
+// How a point's set is settled without a walk where it asks for no light
+// (`settling_summary`): every light it asks for (none) is seen by all of
+// its nodes or by none, as a summary would say.
+const ASKS_NOTHING: u32 = 0xfffffffeu;
+
+// What a walk of the set for word `word` would find where `settled` (a
+// summary around the point's tile, or ASKS_NOTHING) settles every light
+// the point asks for: each is seen by all of the set's nodes or by none,
+// so no count or weight is read (a weight of 1 stands for the set's,
+// which is not empty: `agreement::SMALLEST_KI`).
+fn settled_tally(settled: u32, reach_base: u32, word: u32) -> Tally {
+    var all = 0u;
+    if settled != ASKS_NOTHING {
+        all = reach[reach_base + word] & seen_by_all(settled, word);
+    }
+    return Tally(0u, 0u, 1u, all, all, array<u32, COUNTER_BITS>());
+}
+
+// ASKS_NOTHING where the point asks for no light, else the summary around
+// its tile where that settles every light of `reach` (from `reach_base`),
+// else NO_SUMMARY: its set is walked.
+fn settling_summary(p: vec3<f32>, n: vec3<f32>, reach_base: u32) -> u32 {
+    var asked = 0u;
+    for (var word = 0u; word < directory.header.light_words; word++) {
+        asked |= reach[reach_base + word];
+    }
+    if asked == 0u && summaries_settle() {
+        return ASKS_NOTHING;
+    }
+    let around = summary_around(p, n, 1);
+    if around == NO_SUMMARY {
+        return NO_SUMMARY;
+    }
+    for (var word = 0u; word < directory.header.light_words; word++) {
+        if !settles(around, word, reach[reach_base + word]) {
+            return NO_SUMMARY;
+        }
+    }
+    return around;
 }
 
 fn count_of(t: Tally, light: u32) -> u32 {
@@ -545,7 +589,20 @@ fn shade(index: u32) {
     let origin = offset_ray_origin(point.position, point.geometric_normal);
     let light_words = directory.header.light_words;
     let reach_base = index * 2u * light_words;
-    let first_tally = tally(ball, origin, reach_base, 0u, true);
+    // A point whose nodes all agree on its lights takes their answer from
+    // the summary around its tile, without walking its set.
+    let settled = settling_summary(point.position, point.geometric_normal, reach_base);
+    var first_tally: Tally;
+    if settled != NO_SUMMARY {
+        first_tally = settled_tally(settled, reach_base, 0u);
+        add_count(COUNT_SETTLED, 1u);
+    } else {
+        first_tally = tally(ball, origin, reach_base, 0u, true);
+    }
+    var wide_around = NO_SUMMARY;
+    if asks_wide_set() {
+        wide_around = summary_around(point.position, point.geometric_normal, WIDE_STEPS);
+    }
     let total = first_tally.total;
     add_count(COUNT_CANDIDATES, first_tally.candidates);
     add_count(COUNT_INTERPOLATION_SET, first_tally.kept);
@@ -566,7 +623,9 @@ fn shade(index: u32) {
     var blocker_rays = 0u;
     for (var word = 0u; word < light_words; word++) {
         var t = first_tally;
-        if word > 0u {
+        if word > 0u && settled != NO_SUMMARY {
+            t = settled_tally(settled, reach_base, word);
+        } else if word > 0u {
             t = tally(ball, origin, reach_base, word, false);
         }
         // The lamps the set agrees on and the wide set does not; the
@@ -575,7 +634,7 @@ fn shade(index: u32) {
         let lamps = reach[reach_base + word] & lamp_bits(word);
         let refined = reach[reach_base + light_words + word];
         let agreed = select(0u, refined & (t.all | ~t.any), asks_wide_set());
-        let wide = wide_disagreements(wide_ball, reach_base, word, agreed);
+        let wide = wide_disagreements(wide_ball, wide_around, reach_base, word, agreed);
         nearest_found = 0u;
         find_nearest_blocked(ball, false, reach_base, word, lamps & t.any & ~t.all);
         find_nearest_blocked(wide_ball, true, reach_base, word, wide);
