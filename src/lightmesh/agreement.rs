@@ -128,7 +128,10 @@ impl Agreement {
     /// Whether every node of the set of the point at `p` agrees on every
     /// light of `reach`, by the summary of the nodes around it; if so,
     /// `seen` gets the lights of `reach` that they all see (the others
-    /// none of them sees). The masks are read through `bricks`.
+    /// none of them sees). The masks are read through `bricks`. A point
+    /// that asks for no light needs no summary: every light it asks for
+    /// (none) is seen by all of its nodes or by none, and its set is not
+    /// empty where summaries are usable.
     pub fn settle(
         &mut self,
         p: Vec3,
@@ -138,6 +141,10 @@ impl Agreement {
     ) -> bool {
         if !self.usable {
             return false;
+        }
+        if reach.iter().all(|&asked| asked == 0) {
+            seen.fill(0);
+            return true;
         }
         let cell = lattice::floor(self.lattice.local(p));
         if !cell.is_finite() || cell.abs().max_element() >= MAX_NODE_COORDINATE {
@@ -687,6 +694,27 @@ mod tests {
         assert!(agreement.settle(far, &reach, &mut bricks, &mut again));
         assert_eq!(first, again);
         assert_eq!(first, [1, 0]);
+    }
+
+    #[test]
+    fn a_point_that_asks_for_no_light_settles_without_a_summary() {
+        let store = store();
+        let lattice = Lattice::new(H);
+        let mut bricks = BrickCache::new(&store);
+        let inside = lattice.origin + Vec3::new(0.5, 0.5, 0.5) * H;
+        let mut agreement = Agreement::new((lattice, 2.5 * H, 1), store.words(), Arc::default());
+        let mut seen = [7; 2];
+        assert!(agreement.settle(inside, &[0; 2], &mut bricks, &mut seen));
+        assert_eq!(seen, [0, 0]);
+        let made = (
+            agreement.own.len(),
+            agreement.around.len(),
+            agreement.met.len(),
+        );
+        assert_eq!(made, (0, 0, 0), "no tile was met or summarised");
+        // Below kI = 2 its set may be empty: formula (1) decides.
+        let mut small = Agreement::new((lattice, 1.9 * H, 1), store.words(), Arc::default());
+        assert!(!small.settle(inside, &[0; 2], &mut bricks, &mut [0; 2]));
     }
 
     #[test]
