@@ -309,44 +309,49 @@ fn points_and_surfaces_on_lattice_nodes_and_planes_stay_finite() {
     }
 }
 
+/// The top and four sides of the box from `lo` to `hi`, facing out: with
+/// a floor under it, closed geometry whose inner nodes see no light.
+fn closed_box(lo: Vec3, hi: Vec3) -> [[Vec3; 4]; 5] {
+    [
+        [
+            Vec3::new(lo.x, hi.y, hi.z),
+            Vec3::new(hi.x, hi.y, hi.z),
+            Vec3::new(hi.x, hi.y, lo.z),
+            Vec3::new(lo.x, hi.y, lo.z),
+        ],
+        [
+            Vec3::new(lo.x, lo.y, hi.z),
+            Vec3::new(hi.x, lo.y, hi.z),
+            Vec3::new(hi.x, hi.y, hi.z),
+            Vec3::new(lo.x, hi.y, hi.z),
+        ],
+        [
+            Vec3::new(hi.x, lo.y, lo.z),
+            Vec3::new(lo.x, lo.y, lo.z),
+            Vec3::new(lo.x, hi.y, lo.z),
+            Vec3::new(hi.x, hi.y, lo.z),
+        ],
+        [
+            Vec3::new(hi.x, lo.y, hi.z),
+            Vec3::new(hi.x, lo.y, lo.z),
+            Vec3::new(hi.x, hi.y, lo.z),
+            Vec3::new(hi.x, hi.y, hi.z),
+        ],
+        [
+            Vec3::new(lo.x, lo.y, lo.z),
+            Vec3::new(lo.x, lo.y, hi.z),
+            Vec3::new(lo.x, hi.y, hi.z),
+            Vec3::new(lo.x, hi.y, lo.z),
+        ],
+    ]
+}
+
 #[test]
 fn nodes_inside_closed_objects_see_no_light_and_do_not_break_shading() {
     // A closed box on the floor: nodes inside it are occluded from the lamp.
     let mut scene = lit_floor();
     let m = add_material(&mut scene, lambert(Vec3::splat(0.5)));
-    let (lo, hi) = (Vec3::new(-0.4, 0.0, -0.4), Vec3::new(0.4, 0.8, 0.4));
-    let faces = [
-        [
-            Vec3::new(lo.x, hi.y, hi.z),
-            Vec3::new(hi.x, hi.y, hi.z),
-            Vec3::new(hi.x, hi.y, lo.z),
-            Vec3::new(lo.x, hi.y, lo.z),
-        ],
-        [
-            Vec3::new(lo.x, lo.y, hi.z),
-            Vec3::new(hi.x, lo.y, hi.z),
-            Vec3::new(hi.x, hi.y, hi.z),
-            Vec3::new(lo.x, hi.y, hi.z),
-        ],
-        [
-            Vec3::new(hi.x, lo.y, lo.z),
-            Vec3::new(lo.x, lo.y, lo.z),
-            Vec3::new(lo.x, hi.y, lo.z),
-            Vec3::new(hi.x, hi.y, lo.z),
-        ],
-        [
-            Vec3::new(hi.x, lo.y, hi.z),
-            Vec3::new(hi.x, lo.y, lo.z),
-            Vec3::new(hi.x, hi.y, lo.z),
-            Vec3::new(hi.x, hi.y, hi.z),
-        ],
-        [
-            Vec3::new(lo.x, lo.y, lo.z),
-            Vec3::new(lo.x, lo.y, hi.z),
-            Vec3::new(lo.x, hi.y, hi.z),
-            Vec3::new(lo.x, hi.y, lo.z),
-        ],
-    ];
+    let faces = closed_box(Vec3::new(-0.4, 0.0, -0.4), Vec3::new(0.4, 0.8, 0.4));
     add_quads(&mut scene, &faces, 2, m);
     let whitted = render(scene.clone(), &settings(40, 40));
     let lmm_settings = with_method(settings(40, 40), Method::Lmm, 0.1, 2.5);
@@ -496,39 +501,7 @@ fn points_settled_by_tile_summaries_on_the_gpu_get_the_cpus_bits() {
         Vec3::new(1.0, 1.0, 1.0),
     ];
     add_quads(&mut scene, &[on_planes, tilted], 1, m);
-    let (lo, hi) = (Vec3::new(-1.6, 0.0, -1.6), Vec3::new(-0.9, 0.5, -0.9));
-    let closed = [
-        [
-            Vec3::new(lo.x, hi.y, hi.z),
-            Vec3::new(hi.x, hi.y, hi.z),
-            Vec3::new(hi.x, hi.y, lo.z),
-            Vec3::new(lo.x, hi.y, lo.z),
-        ],
-        [
-            Vec3::new(lo.x, lo.y, hi.z),
-            Vec3::new(hi.x, lo.y, hi.z),
-            Vec3::new(hi.x, hi.y, hi.z),
-            Vec3::new(lo.x, hi.y, hi.z),
-        ],
-        [
-            Vec3::new(hi.x, lo.y, lo.z),
-            Vec3::new(lo.x, lo.y, lo.z),
-            Vec3::new(lo.x, hi.y, lo.z),
-            Vec3::new(hi.x, hi.y, lo.z),
-        ],
-        [
-            Vec3::new(hi.x, lo.y, hi.z),
-            Vec3::new(hi.x, lo.y, lo.z),
-            Vec3::new(hi.x, hi.y, lo.z),
-            Vec3::new(hi.x, hi.y, hi.z),
-        ],
-        [
-            Vec3::new(lo.x, lo.y, lo.z),
-            Vec3::new(lo.x, lo.y, hi.z),
-            Vec3::new(lo.x, hi.y, hi.z),
-            Vec3::new(lo.x, hi.y, lo.z),
-        ],
-    ];
+    let closed = closed_box(Vec3::new(-1.6, 0.0, -1.6), Vec3::new(-0.9, 0.5, -0.9));
     add_quads(&mut scene, &closed, 1, m);
     for i in 0..31 {
         let angle = i as f32 * 0.37;
