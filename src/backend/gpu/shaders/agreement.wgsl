@@ -4,7 +4,7 @@
 // cut into tiles of TILE_EDGE³ nodes, and each brick the pool holds has
 // TILES_PER_SLOT summaries under its slot: its tiles on the mesh's
 // lattice, then its one tile on the wide set's (every other node). A
-// summary (SUMMARY words, `summary_words`) holds per light word the lights
+// summary (`summary_words` words) holds per light word the lights
 // every node sees, then those no node sees, then whether some node is
 // enclosed. A node's invalid bit counts as both: a point's set holds only
 // nodes whose bits for its lights are valid, so a summary that also

@@ -27,9 +27,9 @@
 // them that is not faint (`light_mesh_coverage.wgsl`).
 @group(0) @binding(REACH) var<storage, read> reach: array<u32>;
 // Candidates, interpolation-set sizes, point-to-node segments, fallback
-// points, blocker rays and points settled by a summary, each as a (low, high) pair of u32; then the
-// points whose loops the adapter cut short (the contract's COUNT_* and
-// LOOPS_CUT_SHORT).
+// points, blocker rays and points settled without a walk, each as a
+// (low, high) pair of u32; then the points whose loops the adapter cut
+// short (the contract's COUNT_* and LOOPS_CUT_SHORT).
 @group(0) @binding(COUNTS) var<storage, read_write> counts: array<atomic<u32>, LIGHT_MESH_COUNTERS>;
 
 // Whether the point keeps `node` (whose mask is `mask`) in its
@@ -225,6 +225,16 @@ fn settling_summary(p: vec3<f32>, n: vec3<f32>, reach_base: u32) -> u32 {
         }
     }
     return around;
+}
+
+// The point's tally for word `word`: from `settled` where that settles
+// it, else by a walk of its set, the first of which (word 0) also settles
+// which candidates it keeps.
+fn point_tally(settled: u32, ball: HalfBall, origin: vec3<f32>, reach_base: u32, word: u32) -> Tally {
+    if settled != NO_SUMMARY {
+        return settled_tally(settled, reach_base, word);
+    }
+    return tally(ball, origin, reach_base, word, word == 0u);
 }
 
 fn count_of(t: Tally, light: u32) -> u32 {
@@ -592,17 +602,14 @@ fn shade(index: u32) {
     // A point whose nodes all agree on its lights takes their answer from
     // the summary around its tile, without walking its set.
     let settled = settling_summary(point.position, point.geometric_normal, reach_base);
-    var first_tally: Tally;
     if settled != NO_SUMMARY {
-        first_tally = settled_tally(settled, reach_base, 0u);
         add_count(COUNT_SETTLED, 1u);
-    } else {
-        first_tally = tally(ball, origin, reach_base, 0u, true);
     }
+    let first_tally = point_tally(settled, ball, origin, reach_base, 0u);
+    // The summary around the point's wide tile, looked up once a word
+    // asks the wide set about some lamp.
     var wide_around = NO_SUMMARY;
-    if asks_wide_set() {
-        wide_around = summary_around(point.position, point.geometric_normal, WIDE_STEPS);
-    }
+    var wide_looked_up = false;
     let total = first_tally.total;
     add_count(COUNT_CANDIDATES, first_tally.candidates);
     add_count(COUNT_INTERPOLATION_SET, first_tally.kept);
@@ -623,10 +630,8 @@ fn shade(index: u32) {
     var blocker_rays = 0u;
     for (var word = 0u; word < light_words; word++) {
         var t = first_tally;
-        if word > 0u && settled != NO_SUMMARY {
-            t = settled_tally(settled, reach_base, word);
-        } else if word > 0u {
-            t = tally(ball, origin, reach_base, word, false);
+        if word > 0u {
+            t = point_tally(settled, ball, origin, reach_base, word);
         }
         // The lamps the set agrees on and the wide set does not; the
         // nearest blocked node of those and of the lamps the set disagrees
@@ -634,6 +639,10 @@ fn shade(index: u32) {
         let lamps = reach[reach_base + word] & lamp_bits(word);
         let refined = reach[reach_base + light_words + word];
         let agreed = select(0u, refined & (t.all | ~t.any), asks_wide_set());
+        if agreed != 0u && !wide_looked_up {
+            wide_around = summary_around(point.position, point.geometric_normal, WIDE_STEPS);
+            wide_looked_up = true;
+        }
         let wide = wide_disagreements(wide_ball, wide_around, reach_base, word, agreed);
         nearest_found = 0u;
         find_nearest_blocked(ball, false, reach_base, word, lamps & t.any & ~t.all);
